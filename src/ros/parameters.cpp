@@ -1,0 +1,148 @@
+#include "kneed_walker/ros/parameters.h"
+
+#include <XmlRpcValue.h>
+#include <ros/param.h>
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace kneed_walker {
+namespace {
+
+// Reads typed parameters under one namespace and collects every problem instead of stopping
+// at the first, so a user fixes a launch file in one go.
+class ParameterReader {
+ public:
+  explicit ParameterReader(const ros::NodeHandle& nh) : nh_(nh) {}
+
+  void read(const std::string& name, int& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!fetch(name, raw)) return;
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeInt) return wrongType(name, "an integer");
+    value = static_cast<int>(raw);
+  }
+  void read(const std::string& name, double& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!fetch(name, raw)) return;
+    if (raw.getType() == XmlRpc::XmlRpcValue::TypeInt) {
+      value = static_cast<int>(raw);
+    } else if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+      value = static_cast<double>(raw);
+    } else {
+      wrongType(name, "a number");
+    }
+  }
+  void read(const std::string& name, bool& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!fetch(name, raw)) return;
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeBoolean) return wrongType(name, "true or false");
+    value = static_cast<bool>(raw);
+  }
+  void read(const std::string& name, std::string& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!fetch(name, raw)) return;
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeString) return wrongType(name, "a string");
+    value = static_cast<std::string>(raw);
+  }
+  void read(const std::string& name, std::uint64_t& value) {
+    int as_int = static_cast<int>(value);
+    read(name, as_int);
+    if (as_int < 0) {
+      problems_.push_back(qualified(name) + " = " + std::to_string(as_int) + " must be >= 0");
+      return;
+    }
+    value = static_cast<std::uint64_t>(as_int);
+  }
+
+  // Parameters present under the namespace that no read() asked for: most often typos.
+  void reportUnknown() {
+    std::vector<std::string> all;
+    if (!ros::param::getParamNames(all)) return;
+    const std::string prefix = nh_.getNamespace() + "/";
+    for (const auto& full : all) {
+      if (full.compare(0, prefix.size(), prefix) != 0) continue;
+      const std::string name = full.substr(prefix.size());
+      if (known_.count(name) == 0) {
+        std::string list;
+        for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
+        problems_.push_back(qualified(name) + " is not a parameter of this node (known: " +
+                            list + ")");
+      }
+    }
+  }
+
+  void addProblem(const std::string& problem) { problems_.push_back(problem); }
+  const std::vector<std::string>& problems() const { return problems_; }
+  // "/nodelet_name/<text>": the fully qualified parameter a message is about.
+  std::string qualified(const std::string& text) const { return nh_.getNamespace() + "/" + text; }
+
+ private:
+  bool fetch(const std::string& name, XmlRpc::XmlRpcValue& raw) {
+    known_.insert(name);
+    return nh_.getParam(name, raw);
+  }
+  void wrongType(const std::string& name, const char* expected) {
+    problems_.push_back(qualified(name) + " must be " + expected);
+  }
+
+  const ros::NodeHandle& nh_;
+  std::set<std::string> known_;
+  std::vector<std::string> problems_;
+};
+
+}  // namespace
+
+TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
+  TrackerNodeConfig config;
+  ParameterReader reader(private_nh);
+
+  TrackerOptions& t = config.tracker;
+  reader.read("num_particles", t.num_particles);
+  reader.read("resample_ess_threshold", t.resample_ess_threshold);
+  reader.read("resample_lag_frames", t.resample_lag_frames);
+  reader.read("resample_mixing", t.resample_mixing);
+  reader.read("num_threads", t.num_threads);
+  reader.read("seed", t.seed);
+  reader.read("person_height_m", t.person_height_m);
+  reader.read("person_mass_kg", t.person_mass_kg);
+  reader.read("ground_slope_rad", t.ground_slope_rad);
+  reader.read("default_frame_interval_s", t.default_frame_interval_s);
+  reader.read("max_frame_gap_s", t.max_frame_gap_s);
+
+  RosInterfaceOptions& r = config.ros;
+  reader.read("world_frame", r.world_frame);
+  reader.read("body_id", r.body_id);
+  reader.read("image_queue_size", r.image_queue_size);
+  reader.read("publish_particle_cloud", r.publish_particle_cloud);
+  reader.read("publish_tf", r.publish_tf);
+
+  for (const auto& problem : validate(t)) reader.addProblem(reader.qualified(problem));
+  if (r.world_frame.empty() || r.world_frame.front() == '/')
+    reader.addProblem(reader.qualified("world_frame") + " = '" + r.world_frame +
+                      "' must be a non-empty tf2 frame id without a leading '/'");
+  const bool id_ok = !r.body_id.empty() &&
+                     std::all_of(r.body_id.begin(), r.body_id.end(), [](char c) {
+                       return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                     });
+  if (!id_ok)
+    reader.addProblem(reader.qualified("body_id") + " = '" + r.body_id +
+                      "' must be letters, digits or '_' (REP 155 frame suffix)");
+  if (r.image_queue_size < 1 || r.image_queue_size > 100)
+    reader.addProblem(reader.qualified("image_queue_size") + " = " +
+                      std::to_string(r.image_queue_size) + " is outside [1, 100]");
+  reader.reportUnknown();
+
+  if (!reader.problems().empty()) {
+    std::ostringstream message;
+    message << "invalid parameters:";
+    for (const auto& problem : reader.problems()) message << "\n  " << problem;
+    throw std::invalid_argument(message.str());
+  }
+  return config;
+}
+
+}  // namespace kneed_walker
