@@ -1,0 +1,121 @@
+#include "kneed_walker/core/periodic_gait.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include <cmath>
+#include <limits>
+
+namespace kneed_walker {
+namespace {
+
+// The shank coordinate that a locked knee k ties to its thigh.
+constexpr int kShankOf[kNumKnees] = {kStanceShank, kSwingShank};
+constexpr int kThighOf[kNumKnees] = {kStanceThigh, kSwingThigh};
+
+bool isTiedShank(const KneeFlags& locked, int coordinate) {
+  for (int k = 0; k < kNumKnees; ++k)
+    if (locked[k] && kShankOf[k] == coordinate) return true;
+  return false;
+}
+
+}  // namespace
+
+int GaitCoordinates::size() const {
+  int n = 2 * kNumCoordinates;
+  for (bool l : locked_) n -= l ? 2 : 0;
+  return n;
+}
+
+GaitVector GaitCoordinates::reduce(const WalkerState& state) const {
+  GaitVector r(size());
+  int i = 0;
+  for (int j = 0; j < kNumCoordinates; ++j)
+    if (!isTiedShank(locked_, j)) r[i++] = state.q[j];
+  for (int j = 0; j < kNumCoordinates; ++j)
+    if (!isTiedShank(locked_, j)) r[i++] = state.qdot[j];
+  return r;
+}
+
+WalkerState GaitCoordinates::expand(const GaitVector& r) const {
+  WalkerState s;
+  int i = 0;
+  for (int j = 0; j < kNumCoordinates; ++j)
+    if (!isTiedShank(locked_, j)) s.q[j] = r[i++];
+  for (int j = 0; j < kNumCoordinates; ++j)
+    if (!isTiedShank(locked_, j)) s.qdot[j] = r[i++];
+  for (int k = 0; k < kNumKnees; ++k) {
+    if (!locked_[k]) continue;
+    s.q[kShankOf[k]] = s.q[kThighOf[k]];
+    s.qdot[kShankOf[k]] = s.qdot[kThighOf[k]];
+  }
+  s.knee_on_limit = locked_;
+  return s;
+}
+
+PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerControls& controls,
+                              const WalkerState& guess, const PeriodicGaitOptions& options) {
+  const GaitCoordinates coordinates(guess.knee_on_limit);
+  const int n = coordinates.size();
+  PeriodicGait gait;
+  GaitVector x = coordinates.reduce(guess);
+
+  // Residual S(x) − x; a stride that falls or ends with other knees locked has no residual.
+  auto residual = [&](const GaitVector& at, StrideResult* stride_out) -> GaitVector {
+    const StrideResult stride = simulator.stride(controls, coordinates.expand(at));
+    if (stride_out) *stride_out = stride;
+    GaitVector r = coordinates.reduce(stride.end) - at;
+    if (!stride.completed || stride.end.knee_on_limit != coordinates.locked()) r.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return r;
+  };
+
+  auto jacobianAt = [&](const GaitVector& at) {
+    GaitMatrix j(n, n);
+    for (int c = 0; c < n; ++c) {
+      GaitVector plus = at, minus = at;
+      plus[c] += options.difference_step;
+      minus[c] -= options.difference_step;
+      j.col(c) = (residual(plus, nullptr) - residual(minus, nullptr)) / (2 * options.difference_step);
+    }
+    return j;  // ∂(S(x) − x)/∂x
+  };
+
+  StrideResult stride;
+  GaitVector r = residual(x, &stride);
+  for (gait.iterations = 0; gait.iterations < options.max_iterations; ++gait.iterations) {
+    if (!r.allFinite() || r.lpNorm<Eigen::Infinity>() < options.residual_tolerance) break;
+    const GaitMatrix j = jacobianAt(x);
+    if (!j.allFinite()) break;
+    // Least squares: the stride map may have neutral directions (a decoupled torso).
+    const GaitVector step = j.completeOrthogonalDecomposition().solve(-r);
+    // Backtrack until the residual decreases.
+    double scale = 1.0;
+    GaitVector candidate;
+    GaitVector candidate_r;
+    StrideResult candidate_stride;
+    for (int attempt = 0; attempt < 12; ++attempt, scale *= 0.5) {
+      candidate = x + scale * step;
+      candidate_r = residual(candidate, &candidate_stride);
+      if (candidate_r.allFinite() &&
+          candidate_r.lpNorm<Eigen::Infinity>() < r.lpNorm<Eigen::Infinity>())
+        break;
+    }
+    if (!candidate_r.allFinite()) break;
+    x = candidate;
+    r = candidate_r;
+    stride = candidate_stride;
+  }
+
+  gait.start = coordinates.expand(x);
+  gait.stride = stride;
+  gait.residual = r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::infinity();
+  gait.converged = stride.completed && gait.residual < options.residual_tolerance &&
+                   stride.end.knee_on_limit == guess.knee_on_limit;
+  if (r.allFinite()) {
+    gait.stride_jacobian = jacobianAt(x) + GaitMatrix::Identity(n, n);
+    gait.eigenvalues = gait.stride_jacobian.eigenvalues();
+  }
+  return gait;
+}
+
+}  // namespace kneed_walker

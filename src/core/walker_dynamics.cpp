@@ -1,0 +1,339 @@
+#include "kneed_walker/core/walker_dynamics.h"
+
+#include <Eigen/Cholesky>
+
+#include <cmath>
+
+namespace kneed_walker {
+namespace {
+
+const Point kI(0.0, 1.0);
+
+// Re(conj(a)·b) = a.x b.x + a.y b.y.
+inline double dot(Point a, Point b) { return a.real() * b.real() + a.imag() * b.imag(); }
+// Im(conj(a)·b) = a.x b.y − a.y b.x: the planar cross product.
+inline double cross(Point a, Point b) { return a.real() * b.imag() - a.imag() * b.real(); }
+
+// Velocity coefficients of a point: v = Σ_j V_j q̇_j, with V_j = i w_j e^{i q_j} and the
+// rolling base's −R on the rolling coordinate.
+inline void velocityCoefficients(const KinematicMap& map, const PointMap& p,
+                                 const std::array<Point, kNumCoordinates>& e,
+                                 std::array<Point, kNumCoordinates>& v) {
+  for (int j = 0; j < kNumCoordinates; ++j) v[j] = kI * p.w[j] * e[j];
+  v[map.rolling_coordinate] -= map.foot_radius;
+}
+
+// Solves the equality-constrained system  M x = r + Gᵀλ,  G x = c  for x (and λ), with up to
+// kMaxRows constraint rows, by the Schur complement; no heap allocation.
+template <int N>
+struct ConstrainedSolve {
+  static constexpr int kMaxRows = 4;
+  using VecN = Eigen::Matrix<double, N, 1>;
+  using MatN = Eigen::Matrix<double, N, N>;
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, N, 0, kMaxRows, N>;
+  using VecR = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxRows, 1>;
+  using MatR = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>;
+
+  static void solve(const Eigen::LLT<MatN>& m_llt, const VecN& r, const Rows& g, const VecR& c,
+                    VecN& x, VecR& lambda) {
+    const VecN x_free = m_llt.solve(r);
+    if (g.rows() == 0) {
+      x = x_free;
+      lambda.resize(0);
+      return;
+    }
+    const Eigen::Matrix<double, N, Eigen::Dynamic, 0, N, kMaxRows> m_inv_gt =
+        m_llt.solve(g.transpose());
+    const MatR schur = g * m_inv_gt;
+    lambda = schur.ldlt().solve(c - g * x_free);
+    x = x_free + m_inv_gt * lambda;
+  }
+};
+
+// Subsets of the knee flags to try as the active set, largest first.
+template <typename Accept>
+bool forEachKneeSubset(const KneeFlags& candidates, Accept accept) {
+  const int n_subsets = 1 << kNumKnees;
+  for (int size = kNumKnees; size >= 0; --size) {
+    for (int mask = n_subsets - 1; mask >= 0; --mask) {
+      int count = 0;
+      bool ok = true;
+      for (int k = 0; k < kNumKnees; ++k) {
+        if (mask & (1 << k)) {
+          ++count;
+          ok = ok && candidates[k];
+        }
+      }
+      if (!ok || count != size) continue;
+      KneeFlags subset{};
+      for (int k = 0; k < kNumKnees; ++k) subset[k] = (mask >> k) & 1;
+      if (accept(subset)) return true;
+    }
+  }
+  return false;
+}
+
+constexpr double kComplementarityTolerance = 1e-12;
+
+}  // namespace
+
+JointTorques jointTorques(const WalkerControls& c, const Vector5& q, const Vector5& qdot) {
+  const SpringParameters& s = c.springs;
+  JointTorques t;
+  // Eq. 1, stance knee with rest flexion 0, and swing knee.
+  t[kStanceKnee] = -s.stance_knee_stiffness * (q[kStanceThigh] - q[kStanceShank]) -
+                   s.stance_knee_damping * (qdot[kStanceThigh] - qdot[kStanceShank]) +
+                   c.offsets.stance_knee;
+  t[kSwingKnee] =
+      -s.swing_knee_stiffness * (q[kSwingThigh] - q[kSwingShank] - s.swing_knee_rest_angle) -
+      s.swing_knee_damping * (qdot[kSwingThigh] - qdot[kSwingShank]) + c.offsets.swing_knee;
+  // Eq. 2: undamped hip spring between the thighs, rest angle 0.
+  t[kHip] = -s.hip_stiffness * (q[kStanceThigh] - q[kSwingThigh]) + c.offsets.hip;
+  // Eq. 3: torso spring and damper on the torso's absolute angle.
+  t[kTorsoJoint] = -s.torso_stiffness * (q[kTorso] - s.torso_rest_angle) -
+                   s.torso_damping * qdot[kTorso] + c.offsets.torso;
+  t[kStanceAnkle] = c.offsets.stance_ankle;
+  return t;
+}
+
+Vector5 generalisedForce(const JointTorques& t) {
+  Vector5 f = Vector5::Zero();
+  f[kStanceThigh] += t[kStanceKnee];
+  f[kStanceShank] -= t[kStanceKnee];
+  f[kSwingThigh] += t[kSwingKnee];
+  f[kSwingShank] -= t[kSwingKnee];
+  f[kStanceThigh] += t[kHip];
+  f[kSwingThigh] -= t[kHip];
+  f[kTorso] += t[kTorsoJoint];
+  f[kStanceThigh] -= t[kTorsoJoint];
+  f[kStanceShank] += t[kStanceAnkle];
+  return f;
+}
+
+void equationsOfMotion(const KinematicMap& map, double gravity, double ground_slope,
+                       const Vector5& q, const Vector5& qdot, const Vector5& applied_force,
+                       EquationsOfMotion& out) {
+  const auto e = phasors(q);
+  const Point g_vec = gravity * Point(-std::sin(ground_slope), -std::cos(ground_slope));
+  Matrix5& m = out.mass;
+  Vector5& f = out.force;
+  m.setZero();
+  f = applied_force;
+  std::array<Point, kNumCoordinates> v;
+  for (const BodyMap& body : map.bodies) {
+    velocityCoefficients(map, body.com, e, v);  // column of T for this body's (x, y)
+    Point convective = 0;                        // g_conv: Σ_j −w_j e^{iq_j} q̇_j²
+    for (int j = 0; j < kNumCoordinates; ++j)
+      convective -= body.com.w[j] * e[j] * (qdot[j] * qdot[j]);
+    const Point net = g_vec - convective;  // f/m − g_conv
+    for (int j = 0; j < kNumCoordinates; ++j) {
+      for (int k = j; k < kNumCoordinates; ++k) m(j, k) += body.mass * dot(v[j], v[k]);
+      f[j] += body.mass * dot(v[j], net);
+    }
+    m(body.angle, body.angle) += body.inertia;
+  }
+  m.template triangularView<Eigen::StrictlyLower>() = m.transpose();
+}
+
+Vector5 kneeFlexionRow(int knee) {
+  Vector5 a = Vector5::Zero();
+  const int thigh = knee == 0 ? kStanceThigh : kSwingThigh;
+  const int shank = knee == 0 ? kStanceShank : kSwingShank;
+  a[thigh] = 1.0;
+  a[shank] = -1.0;
+  return a;
+}
+
+Vector5 constrainedAcceleration(const EquationsOfMotion& eom, const KneeFlags& on_limit,
+                                KneeFlags* active) {
+  const Eigen::LLT<Matrix5> llt(eom.mass);
+  const Vector5 free_acc = llt.solve(eom.force);
+  if (!on_limit[0] && !on_limit[1]) {
+    if (active) *active = {false, false};
+    return free_acc;
+  }
+  // u_k = M⁻¹ a_k; with virtual torques τ_k a_k, q̈ = q̈_free + Σ τ_k u_k (eq. 8).
+  std::array<Vector5, kNumKnees> a, u;
+  for (int k = 0; k < kNumKnees; ++k) {
+    a[k] = kneeFlexionRow(k);
+    u[k] = llt.solve(a[k]);
+  }
+  Vector5 result = free_acc;
+  KneeFlags chosen{};
+  forEachKneeSubset(on_limit, [&](const KneeFlags& subset) {
+    Eigen::Matrix2d schur = Eigen::Matrix2d::Identity();
+    Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (!subset[k]) continue;
+      rhs[k] = -a[k].dot(free_acc);
+      for (int l = 0; l < kNumKnees; ++l)
+        if (subset[l]) schur(k, l) = a[k].dot(u[l]);
+    }
+    const Eigen::Vector2d tau = schur.ldlt().solve(rhs);
+    Vector5 acc = free_acc;
+    for (int k = 0; k < kNumKnees; ++k)
+      if (subset[k]) acc += tau[k] * u[k];
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (subset[k] && tau[k] < -kComplementarityTolerance) return false;  // would pull
+      if (!subset[k] && on_limit[k] && a[k].dot(acc) < -kComplementarityTolerance)
+        return false;  // a free knee on its limit would hyperextend
+    }
+    result = acc;
+    chosen = subset;
+    return true;
+  });
+  if (active) *active = chosen;
+  return result;
+}
+
+Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const KneeFlags& knees) {
+  // Eq. 6 for the knees whose limit impulse is needed: [M −A; Aᵀ 0][q̇⁺; λ] = [M q̇⁻; 0] with
+  // λ ≥ 0 (the kneecap pushes), and every other listed knee not hyperextending.
+  using Solve = ConstrainedSolve<kNumCoordinates>;
+  const Eigen::LLT<Matrix5> llt(mass);
+  const Vector5 momentum = mass * qdot;
+  Vector5 result = qdot;
+  forEachKneeSubset(knees, [&](const KneeFlags& subset) {
+    Solve::Rows g(0, kNumCoordinates);
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (!subset[k]) continue;
+      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
+      g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
+    }
+    Vector5 candidate;
+    Solve::VecR lambda;
+    Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), candidate, lambda);
+    int row = 0;
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (subset[k] && lambda[row++] < -kComplementarityTolerance) return false;
+      if (!subset[k] && knees[k] && kneeFlexionRow(k).dot(candidate) < -kComplementarityTolerance)
+        return false;
+    }
+    result = candidate;
+    return true;
+  });
+  return result;
+}
+
+Vector5 projectKneePosition(const Matrix5& mass, const Vector5& q, const KneeFlags& knees) {
+  using Solve = ConstrainedSolve<kNumCoordinates>;
+  Solve::Rows g(0, kNumCoordinates);
+  for (int k = 0; k < kNumKnees; ++k) {
+    if (!knees[k]) continue;
+    g.conservativeResize(g.rows() + 1, Eigen::NoChange);
+    g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
+  }
+  // min ½ ΔqᵀMΔq subject to a_kᵀ(q + Δq) = 0.
+  const Eigen::LLT<Matrix5> llt(mass);
+  Vector5 delta;
+  Solve::VecR lambda;
+  Solve::solve(llt, Vector5::Zero(), g, -(g * q), delta, lambda);
+  return q + delta;
+}
+
+HeelStrike heelStrike(const KinematicMap& map, const Vector5& q, const Vector5& qdot,
+                      double toe_off_impulse, const KneeFlags& knees_on_limit) {
+  // Floating-base coordinates z = (C_x, C_y, q): the old stance foot centre is set free so
+  // that its contact can be released and the new one imposed (walker-model.md §2).
+  constexpr int kN = kNumCoordinates + 2;
+  using Solve = ConstrainedSolve<kN>;
+  using VecN = Solve::VecN;
+  const auto e = phasors(q);
+
+  Solve::MatN m = Solve::MatN::Zero();
+  for (const BodyMap& body : map.bodies) {
+    std::array<Point, kN> v;
+    v[0] = 1.0;
+    v[1] = kI;
+    for (int j = 0; j < kNumCoordinates; ++j) v[2 + j] = kI * body.com.w[j] * e[j];
+    for (int a = 0; a < kN; ++a)
+      for (int b = a; b < kN; ++b) m(a, b) += body.mass * dot(v[a], v[b]);
+    m(2 + body.angle, 2 + body.angle) += body.inertia;
+  }
+  m.template triangularView<Eigen::StrictlyLower>() = m.transpose();
+
+  VecN z_dot;
+  z_dot << -map.foot_radius * qdot[map.rolling_coordinate], 0.0, qdot;
+
+  // Toe-off impulse ι at the old stance foot's contact point P1 = C − iR, towards the hip.
+  VecN momentum = m * z_dot;
+  if (toe_off_impulse != 0) {
+    const Point to_hip = relativePosition(map.hip, e) + kI * map.foot_radius;
+    const Point u = to_hip / std::abs(to_hip);
+    // Velocity of P1 (on the rigid stance foot): v_C + R q̇_S1 along x.
+    momentum[0] += toe_off_impulse * u.real();
+    momentum[1] += toe_off_impulse * u.imag();
+    momentum[2 + map.rolling_coordinate] += toe_off_impulse * u.real() * map.foot_radius;
+  }
+
+  // New contact: the swing sole point P2 = C2 − iR, velocity v_C2 + R q̇_S2 along x, must stop.
+  Solve::Rows contact(2, kN);
+  contact.setZero();
+  contact(0, 0) = 1.0;
+  contact(1, 1) = 1.0;
+  for (int j = 0; j < kNumCoordinates; ++j) {
+    const Point vj = kI * map.swing_foot_centre.w[j] * e[j];
+    contact(0, 2 + j) = vj.real();
+    contact(1, 2 + j) = vj.imag();
+  }
+  contact(0, 2 + kSwingShank) += map.foot_radius;
+
+  const Eigen::LLT<Solve::MatN> llt(m);
+  HeelStrike result{};
+  VecN z_after = z_dot;
+  forEachKneeSubset(knees_on_limit, [&](const KneeFlags& subset) {
+    Solve::Rows g = contact;
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (!subset[k]) continue;
+      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
+      g.row(g.rows() - 1).setZero();
+      g.row(g.rows() - 1).tail<kNumCoordinates>() = kneeFlexionRow(k).transpose();
+    }
+    VecN z;
+    Solve::VecR lambda;
+    Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), z, lambda);
+    int row = 2;
+    for (int k = 0; k < kNumKnees; ++k) {
+      const double flexion_rate = kneeFlexionRow(k).dot(z.tail<kNumCoordinates>());
+      if (subset[k] && lambda[row++] < -kComplementarityTolerance) return false;
+      if (!subset[k] && knees_on_limit[k] && flexion_rate < -kComplementarityTolerance)
+        return false;
+    }
+    z_after = z;
+    result.knees_held = subset;
+    result.ground_normal_impulse = lambda[1];
+    return true;
+  });
+  result.qdot_after = z_after.tail<kNumCoordinates>();
+  return result;
+}
+
+double mechanicalEnergy(const KinematicMap& map, double gravity, double ground_slope,
+                        const Vector5& q, const Vector5& qdot, double x0) {
+  const auto e = phasors(q);
+  const Point base = stanceFootCentre(map, q, x0);
+  double energy = 0;
+  for (const BodyMap& body : map.bodies) {
+    const Point p = base + relativePosition(body.com, e);
+    const Point v = velocity(map, body.com, q, qdot);
+    energy += 0.5 * body.mass * std::norm(v) + 0.5 * body.inertia * qdot[body.angle] * qdot[body.angle];
+    energy += body.mass * gravity *
+              (std::sin(ground_slope) * p.real() + std::cos(ground_slope) * p.imag());
+  }
+  return energy;
+}
+
+double angularMomentum(const KinematicMap& map, const Vector5& q, const Vector5& qdot, double x0,
+                       Point about) {
+  const auto e = phasors(q);
+  const Point base = stanceFootCentre(map, q, x0);
+  double h = 0;
+  for (const BodyMap& body : map.bodies) {
+    const Point p = base + relativePosition(body.com, e);
+    h += body.mass * cross(p - about, velocity(map, body.com, q, qdot)) +
+         body.inertia * qdot[body.angle];
+  }
+  return h;
+}
+
+}  // namespace kneed_walker

@@ -1,0 +1,238 @@
+#include "kneed_walker/core/walker_simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace kneed_walker {
+namespace {
+
+// Which event ends a trial step first.
+enum class Event { kNone, kStanceKnee, kSwingKnee, kHeelStrike };
+
+}  // namespace
+
+struct WalkerSimulator::Derivative {
+  Vector5 qdot;
+  Vector5 qddot;
+  JointTorques torque_squared;
+  double power;
+};
+
+WalkerSimulator::WalkerSimulator(const WalkerModel& model, const SimulationOptions& options)
+    : model_(model), map_(kneedWalkerMap(model)), options_(options) {
+  if (!(options.max_step > 0 && options.max_step <= 0.2))
+    throw std::invalid_argument("SimulationOptions.max_step must lie in (0, 0.2] natural time units");
+  if (!(options.event_time_tolerance > 0 && options.event_time_tolerance < options.max_step))
+    throw std::invalid_argument("SimulationOptions.event_time_tolerance must lie in (0, max_step)");
+  if (!(model.gravity > 0 && model.legLength() > 0))
+    throw std::invalid_argument("WalkerModel needs gravity > 0 and a positive leg length");
+  natural_time_ = std::sqrt(model.legLength() / model.gravity);
+}
+
+WalkerSimulator::Derivative WalkerSimulator::derivative(const WalkerControls& controls,
+                                                        const Vector5& q, const Vector5& qdot,
+                                                        const KneeFlags& on_limit) const {
+  const JointTorques torques = jointTorques(controls, q, qdot);
+  const Vector5 applied = generalisedForce(torques);
+  EquationsOfMotion eom;
+  equationsOfMotion(map_, model_.gravity, controls.ground_slope, q, qdot, applied, eom);
+  Derivative d;
+  d.qdot = qdot;
+  d.qddot = constrainedAcceleration(eom, on_limit);  // eqs. 4, 7, 8
+  for (int j = 0; j < kNumJoints; ++j) d.torque_squared[j] = torques[j] * torques[j];
+  d.power = applied.dot(qdot);
+  return d;
+}
+
+void WalkerSimulator::rk4(const WalkerControls& controls, const WalkerState& from, double h,
+                          WalkerState& to, TorqueIntegrals* integrals) const {
+  const KneeFlags& lim = from.knee_on_limit;
+  const Derivative k1 = derivative(controls, from.q, from.qdot, lim);
+  const Derivative k2 =
+      derivative(controls, from.q + 0.5 * h * k1.qdot, from.qdot + 0.5 * h * k1.qddot, lim);
+  const Derivative k3 =
+      derivative(controls, from.q + 0.5 * h * k2.qdot, from.qdot + 0.5 * h * k2.qddot, lim);
+  const Derivative k4 = derivative(controls, from.q + h * k3.qdot, from.qdot + h * k3.qddot, lim);
+  to = from;
+  to.q = from.q + (h / 6) * (k1.qdot + 2 * k2.qdot + 2 * k3.qdot + k4.qdot);
+  to.qdot = from.qdot + (h / 6) * (k1.qddot + 2 * k2.qddot + 2 * k3.qddot + k4.qddot);
+  to.time_in_stride = from.time_in_stride + h;
+  if (integrals) {
+    for (int j = 0; j < kNumJoints; ++j)
+      integrals->squared[j] += (h / 6) * (k1.torque_squared[j] + 2 * k2.torque_squared[j] +
+                                          2 * k3.torque_squared[j] + k4.torque_squared[j]);
+    integrals->work += (h / 6) * (k1.power + 2 * k2.power + 2 * k3.power + k4.power);
+  }
+}
+
+void WalkerSimulator::applyKneeLimit(WalkerState& state, int knee) const {
+  // Eq. 6, then the least-squares projection onto the boundary.
+  state.knee_on_limit[knee] = true;
+  EquationsOfMotion eom;
+  equationsOfMotion(map_, model_.gravity, 0.0, state.q, state.qdot, Vector5::Zero(), eom);
+  state.qdot = projectKneeVelocity(eom.mass, state.qdot, state.knee_on_limit);
+  state.q = projectKneePosition(eom.mass, state.q, state.knee_on_limit);
+}
+
+WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
+                            double toe_off_impulse) {
+  const HeelStrike impact =
+      heelStrike(map, before.q, before.qdot, toe_off_impulse, before.knee_on_limit);
+  const Point new_foot = position(map, map.swing_foot_centre, before.q, before.stance_foot_x);
+  // Swap stance and swing labels (the torso keeps its index).
+  auto swap = [](const Vector5& v) {
+    Vector5 s;
+    s << v[kTorso], v[kSwingThigh], v[kSwingShank], v[kStanceThigh], v[kStanceShank];
+    return s;
+  };
+  WalkerState after = before;
+  after.q = swap(before.q);
+  after.qdot = swap(impact.qdot_after);
+  after.stance_foot_x = new_foot.real() + map.foot_radius * after.q[map.rolling_coordinate];
+  after.knee_on_limit = {before.knee_on_limit[1], before.knee_on_limit[0]};
+  after.stance_leg = otherLeg(before.stance_leg);
+  after.time_in_stride = 0;
+  ++after.heel_strikes;
+  return after;
+}
+
+bool WalkerSimulator::hasFallen(const WalkerState& s) const {
+  if (!s.q.allFinite() || !s.qdot.allFinite()) return true;
+  const double hip_height = pointPosition(map_.hip, s).imag();
+  return hip_height < options_.min_hip_height * model_.legLength() ||
+         s.time_in_stride > options_.max_stride_duration * natural_time_;
+}
+
+AdvanceReport WalkerSimulator::advance(const WalkerControls& controls, WalkerState& state,
+                                       double duration, TorqueIntegrals* integrals) const {
+  return run(controls, state, duration, false, integrals);
+}
+
+AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& state,
+                                   double duration, bool stop_at_heel_strike,
+                                   TorqueIntegrals* integrals) const {
+  AdvanceReport report;
+  if (state.fallen) {
+    report.fell = true;
+    return report;
+  }
+  const double max_step = options_.max_step * natural_time_;
+  const double tolerance = options_.event_time_tolerance * natural_time_;
+  WalkerState trial;
+  while (report.elapsed < duration) {
+    const double h = std::min(max_step, duration - report.elapsed);
+    rk4(controls, state, h, trial, nullptr);
+
+    // Event functions, positive before the event: knee flexion of free knees, swing-sole
+    // clearance (a heel strike needs the swing foot ahead of the stance foot; a foot that
+    // scuffs the ground while passing is ignored, as in McGeer's walkers).
+    auto eventValue = [&](Event event, const WalkerState& s) {
+      switch (event) {
+        case Event::kStanceKnee: return kneeFlexion(s.q, 0);
+        case Event::kSwingKnee: return kneeFlexion(s.q, 1);
+        case Event::kHeelStrike: return swingFootClearance(map_, s.q);
+        case Event::kNone: break;
+      }
+      return 1.0;
+    };
+    auto triggered = [&](Event event) {
+      switch (event) {
+        case Event::kStanceKnee:
+        case Event::kSwingKnee: {
+          const int knee = event == Event::kStanceKnee ? 0 : 1;
+          return !state.knee_on_limit[knee] && eventValue(event, trial) < 0;
+        }
+        case Event::kHeelStrike:
+          return eventValue(event, state) > 0 && eventValue(event, trial) <= 0 &&
+                 relativePosition(map_.swing_foot_centre, phasors(trial.q)).real() > 0;
+        case Event::kNone: break;
+      }
+      return false;
+    };
+
+    // Localise the earliest event by the Illinois method on the step fraction.
+    Event first = Event::kNone;
+    double first_fraction = 2.0;
+    for (Event event : {Event::kStanceKnee, Event::kSwingKnee, Event::kHeelStrike}) {
+      if (!triggered(event)) continue;
+      double lo = 0, hi = 1;
+      double g_lo = eventValue(event, state), g_hi = eventValue(event, trial);
+      int side = 0;
+      WalkerState probe;
+      while ((hi - lo) * h > tolerance) {
+        double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+        if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
+        rk4(controls, state, mid * h, probe, nullptr);
+        const double g_mid = eventValue(event, probe);
+        if (g_mid > 0) {
+          lo = mid;
+          g_lo = g_mid;
+          if (side == 1) g_hi *= 0.5;
+          side = 1;
+        } else {
+          hi = mid;
+          g_hi = g_mid;
+          if (side == -1) g_lo *= 0.5;
+          side = -1;
+        }
+        if (g_mid == 0) break;
+      }
+      if (hi < first_fraction) {
+        first_fraction = hi;
+        first = event;
+      }
+    }
+
+    if (first == Event::kNone) {
+      rk4(controls, state, h, state, integrals);
+      report.elapsed += h;
+    } else {
+      const double h_event = first_fraction * h;
+      rk4(controls, state, h_event, state, integrals);
+      report.elapsed += h_event;
+      if (first == Event::kHeelStrike) {
+        state = afterHeelStrike(map_, state, controls.toe_off_impulse);
+        ++report.heel_strikes;
+      } else {
+        applyKneeLimit(state, first == Event::kStanceKnee ? 0 : 1);
+        ++report.knee_limit_events;
+      }
+    }
+
+    // A knee held on its limit leaves it when the motion flexes it again.
+    for (int k = 0; k < kNumKnees; ++k)
+      if (state.knee_on_limit[k] && kneeFlexion(state.q, k) > 1e-12) state.knee_on_limit[k] = false;
+
+    if (hasFallen(state)) {
+      state.fallen = true;
+      report.fell = true;
+      return report;
+    }
+    if (stop_at_heel_strike && report.heel_strikes > 0) return report;
+  }
+  return report;
+}
+
+StrideResult WalkerSimulator::stride(const WalkerControls& controls,
+                                     const WalkerState& start) const {
+  StrideResult result;
+  result.end = start;
+  result.end.time_in_stride = 0;
+  const double hip_start = pointPosition(map_.hip, result.end).real();
+  const double limit = options_.max_stride_duration * natural_time_;
+  const AdvanceReport report = run(controls, result.end, limit * 1.01, true, &result.integrals);
+  result.completed = report.heel_strikes > 0 && !report.fell;
+  result.duration = report.elapsed;
+  result.step_length = pointPosition(map_.hip, result.end).real() - hip_start;
+  result.speed = result.duration > 0 ? result.step_length / result.duration : 0;
+  return result;
+}
+
+double WalkerSimulator::mechanicalEnergy(const WalkerControls& controls,
+                                         const WalkerState& state) const {
+  return kneed_walker::mechanicalEnergy(map_, model_.gravity, controls.ground_slope, state.q,
+                                        state.qdot, state.stance_foot_x);
+}
+
+}  // namespace kneed_walker
