@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <cmath>
 
 namespace kneed_walker {
@@ -186,14 +187,17 @@ Vector5 constrainedAcceleration(const EquationsOfMotion& eom, const KneeFlags& o
   return result;
 }
 
-Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const KneeFlags& knees) {
+Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const KneeFlags& knees,
+                            double sticking_rate) {
   // Eq. 6 for the knees whose limit impulse is needed: [M −A; Aᵀ 0][q̇⁺; λ] = [M q̇⁻; 0] with
-  // λ ≥ 0 (the kneecap pushes), and every other listed knee not hyperextending.
+  // λ ≥ 0 (the kneecap pushes), and every other listed knee leaving at sticking_rate or more.
+  // When no set qualifies (a knee would leave, but too slowly), all listed knees are held.
   using Solve = ConstrainedSolve<kNumCoordinates>;
   const Eigen::LLT<Matrix5> llt(mass);
   const Vector5 momentum = mass * qdot;
   Vector5 result = qdot;
-  forEachKneeSubset(knees, [&](const KneeFlags& subset) {
+  const double leave_rate = std::max(sticking_rate, -kComplementarityTolerance);
+  const bool found = forEachKneeSubset(knees, [&](const KneeFlags& subset) {
     Solve::Rows g(0, kNumCoordinates);
     for (int k = 0; k < kNumKnees; ++k) {
       if (!subset[k]) continue;
@@ -206,12 +210,21 @@ Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const Knee
     int row = 0;
     for (int k = 0; k < kNumKnees; ++k) {
       if (subset[k] && lambda[row++] < -kComplementarityTolerance) return false;
-      if (!subset[k] && knees[k] && kneeFlexionRow(k).dot(candidate) < -kComplementarityTolerance)
-        return false;
+      if (!subset[k] && knees[k] && kneeFlexionRow(k).dot(candidate) < leave_rate) return false;
     }
     result = candidate;
     return true;
   });
+  if (!found) {
+    Solve::Rows g(0, kNumCoordinates);
+    for (int k = 0; k < kNumKnees; ++k) {
+      if (!knees[k]) continue;
+      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
+      g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
+    }
+    Solve::VecR lambda;
+    Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), result, lambda);
+  }
   return result;
 }
 

@@ -71,7 +71,8 @@ void WalkerSimulator::applyKneeLimit(WalkerState& state, int knee) const {
   state.knee_on_limit[knee] = true;
   EquationsOfMotion eom;
   equationsOfMotion(map_, model_.gravity, 0.0, state.q, state.qdot, Vector5::Zero(), eom);
-  state.qdot = projectKneeVelocity(eom.mass, state.qdot, state.knee_on_limit);
+  state.qdot = projectKneeVelocity(eom.mass, state.qdot, state.knee_on_limit,
+                                   options_.knee_sticking_rate / natural_time_);
   state.q = projectKneePosition(eom.mass, state.q, state.knee_on_limit);
 }
 
@@ -90,7 +91,13 @@ WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
   after.q = swap(before.q);
   after.qdot = swap(impact.qdot_after);
   after.stance_foot_x = new_foot.real() + map.foot_radius * after.q[map.rolling_coordinate];
-  after.knee_on_limit = {before.knee_on_limit[1], before.knee_on_limit[0]};
+  // A knee stays on its limit only if the impact left it there (zero flexion rate); a knee
+  // that the impact sets flexing is free from now on.
+  for (int k = 0; k < kNumKnees; ++k) {
+    const int swapped = 1 - k;
+    after.knee_on_limit[swapped] =
+        before.knee_on_limit[k] && kneeFlexionRow(k).dot(impact.qdot_after) <= 1e-12;
+  }
   after.stance_leg = otherLeg(before.stance_leg);
   after.time_in_stride = 0;
   ++after.heel_strikes;
@@ -116,6 +123,13 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
   if (state.fallen) {
     report.fell = true;
     return report;
+  }
+  // A state from outside (a perturbed particle, a hand-made guess) may sit beyond a knee limit
+  // or move into it while flagged as on it: put it on the limit first (eq. 6 + projection).
+  for (int k = 0; k < kNumKnees; ++k) {
+    const bool beyond = kneeFlexion(state.q, k) < 0;
+    const bool into = state.knee_on_limit[k] && kneeFlexionRow(k).dot(state.qdot) < 0;
+    if (beyond || into) applyKneeLimit(state, k);
   }
   const double max_step = options_.max_step * natural_time_;
   const double tolerance = options_.event_time_tolerance * natural_time_;

@@ -81,9 +81,13 @@ inline double kneeFlexion(const Vector5& q, int knee) { return kneeFlexionRow(kn
 Vector5 constrainedAcceleration(const EquationsOfMotion& eom, const KneeFlags& on_limit,
                                 KneeFlags* active = nullptr);
 
-// Perfectly inelastic knee-limit collision (eq. 6): removes the flexion velocity of the
-// knees in `knees`, with minimal change in kinetic energy metric M(q).
-Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const KneeFlags& knees);
+// Perfectly inelastic knee-limit collision (eq. 6) for the knees in `knees`: the knees whose
+// limit impulse is needed lose their flexion velocity (minimal change in the metric M(q));
+// the others keep flexing away. A knee that would leave slower than `sticking_rate` (rad per
+// model time) stays on its limit, which ends the endless ping-pong of two knees kicking each
+// other off their limits with ever smaller rates (a resting-contact threshold).
+Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const KneeFlags& knees,
+                            double sticking_rate = 0);
 
 // Least-squares projection (in the metric M) of q onto the limits of the knees in `knees`:
 // the paper's final projection that removes numerical drift.

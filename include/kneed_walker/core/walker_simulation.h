@@ -45,6 +45,7 @@ struct SimulationOptions {
   double event_time_tolerance = 1e-12;  // events are localised within this, natural time units
   double max_stride_duration = 6.0;   // a longer stride counts as a fall, natural time units
   double min_hip_height = 0.5;        // a hip lower than this × leg length is a fall
+  double knee_sticking_rate = 1e-3;   // a knee leaving its limit slower stays on it, rad per natural time
 };
 
 struct AdvanceReport {
