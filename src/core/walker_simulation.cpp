@@ -7,7 +7,7 @@
 namespace kneed_walker {
 namespace {
 
-// Which event ends a trial step first.
+// The events that can end a trial step.
 enum class Event { kNone, kStanceKnee, kSwingKnee, kHeelStrike };
 
 }  // namespace
@@ -20,7 +20,10 @@ struct WalkerSimulator::Derivative {
 };
 
 WalkerSimulator::WalkerSimulator(const WalkerModel& model, const SimulationOptions& options)
-    : model_(model), map_(kneedWalkerMap(model)), options_(options) {
+    : model_(model),
+      map_(kneedWalkerMap(model)),
+      inertia_(inertiaCoefficients(map_)),
+      options_(options) {
   if (!(options.max_step > 0 && options.max_step <= 0.2))
     throw std::invalid_argument("SimulationOptions.max_step must lie in (0, 0.2] natural time units");
   if (!(options.event_time_tolerance > 0 && options.event_time_tolerance < options.max_step))
@@ -36,7 +39,7 @@ WalkerSimulator::Derivative WalkerSimulator::derivative(const WalkerControls& co
   const JointTorques torques = jointTorques(controls, q, qdot);
   const Vector5 applied = generalisedForce(torques);
   EquationsOfMotion eom;
-  equationsOfMotion(map_, model_.gravity, controls.ground_slope, q, qdot, applied, eom);
+  equationsOfMotion(inertia_, model_.gravity, controls.ground_slope, q, qdot, applied, eom);
   Derivative d;
   d.qdot = qdot;
   d.qddot = constrainedAcceleration(eom, on_limit);  // eqs. 4, 7, 8
@@ -70,7 +73,7 @@ void WalkerSimulator::applyKneeLimit(WalkerState& state, int knee) const {
   // Eq. 6, then the least-squares projection onto the boundary.
   state.knee_on_limit[knee] = true;
   EquationsOfMotion eom;
-  equationsOfMotion(map_, model_.gravity, 0.0, state.q, state.qdot, Vector5::Zero(), eom);
+  equationsOfMotion(inertia_, model_.gravity, 0.0, state.q, state.qdot, Vector5::Zero(), eom);
   state.qdot = projectKneeVelocity(eom.mass, state.qdot, state.knee_on_limit,
                                    options_.knee_sticking_rate / natural_time_);
   state.q = projectKneePosition(eom.mass, state.q, state.knee_on_limit);
@@ -104,10 +107,16 @@ WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
   return after;
 }
 
-bool WalkerSimulator::hasFallen(const WalkerState& s) const {
+WalkerSimulator::Geometry WalkerSimulator::geometry(const Vector5& q) const {
+  const auto e = phasors(q);
+  const Point swing_foot = relativePosition(map_.swing_foot_centre, e);
+  return {swing_foot.imag(), swing_foot.real(),
+          relativePosition(map_.hip, e).imag() + map_.foot_radius};
+}
+
+bool WalkerSimulator::hasFallen(const WalkerState& s, const Geometry& g) const {
   if (!s.q.allFinite() || !s.qdot.allFinite()) return true;
-  const double hip_height = pointPosition(map_.hip, s).imag();
-  return hip_height < options_.min_hip_height * model_.legLength() ||
+  return g.hip_height < options_.min_hip_height * model_.legLength() ||
          s.time_in_stride > options_.max_stride_duration * natural_time_;
 }
 
@@ -133,75 +142,78 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
   }
   const double max_step = options_.max_step * natural_time_;
   const double tolerance = options_.event_time_tolerance * natural_time_;
+
+  // Event functions, positive before the event: the flexion of a free knee, and the
+  // swing-sole clearance. A heel strike needs the swing foot ahead of the stance foot; a foot
+  // that scuffs the ground while passing is ignored, as in McGeer's walkers.
+  auto eventValue = [&](Event event, const WalkerState& s) {
+    switch (event) {
+      case Event::kStanceKnee: return kneeFlexion(s.q, 0);
+      case Event::kSwingKnee: return kneeFlexion(s.q, 1);
+      case Event::kHeelStrike: return swingFootClearance(map_, s.q);
+      case Event::kNone: break;
+    }
+    return 1.0;
+  };
+
+  Geometry at_state = geometry(state.q);
   WalkerState trial;
   while (report.elapsed < duration) {
     const double h = std::min(max_step, duration - report.elapsed);
-    rk4(controls, state, h, trial, nullptr);
+    TorqueIntegrals step_integrals;
+    rk4(controls, state, h, trial, integrals ? &step_integrals : nullptr);
+    const Geometry at_trial = geometry(trial.q);
 
-    // Event functions, positive before the event: knee flexion of free knees, swing-sole
-    // clearance (a heel strike needs the swing foot ahead of the stance foot; a foot that
-    // scuffs the ground while passing is ignored, as in McGeer's walkers).
-    auto eventValue = [&](Event event, const WalkerState& s) {
-      switch (event) {
-        case Event::kStanceKnee: return kneeFlexion(s.q, 0);
-        case Event::kSwingKnee: return kneeFlexion(s.q, 1);
-        case Event::kHeelStrike: return swingFootClearance(map_, s.q);
-        case Event::kNone: break;
-      }
-      return 1.0;
-    };
-    auto triggered = [&](Event event) {
-      switch (event) {
-        case Event::kStanceKnee:
-        case Event::kSwingKnee: {
-          const int knee = event == Event::kStanceKnee ? 0 : 1;
-          return !state.knee_on_limit[knee] && eventValue(event, trial) < 0;
-        }
-        case Event::kHeelStrike:
-          return eventValue(event, state) > 0 && eventValue(event, trial) <= 0 &&
-                 relativePosition(map_.swing_foot_centre, phasors(trial.q)).real() > 0;
-        case Event::kNone: break;
-      }
-      return false;
-    };
+    const std::array<bool, 3> triggered = {
+        !state.knee_on_limit[0] && kneeFlexion(trial.q, 0) < 0,
+        !state.knee_on_limit[1] && kneeFlexion(trial.q, 1) < 0,
+        at_state.swing_clearance > 0 && at_trial.swing_clearance <= 0 &&
+            at_trial.swing_foot_ahead > 0};
+    const bool any_event = triggered[0] || triggered[1] || triggered[2];
 
-    // Localise the earliest event by the Illinois method on the step fraction.
-    Event first = Event::kNone;
-    double first_fraction = 2.0;
-    for (Event event : {Event::kStanceKnee, Event::kSwingKnee, Event::kHeelStrike}) {
-      if (!triggered(event)) continue;
-      double lo = 0, hi = 1;
-      double g_lo = eventValue(event, state), g_hi = eventValue(event, trial);
-      int side = 0;
-      WalkerState probe;
-      while ((hi - lo) * h > tolerance) {
-        double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
-        if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
-        rk4(controls, state, mid * h, probe, nullptr);
-        const double g_mid = eventValue(event, probe);
-        if (g_mid > 0) {
-          lo = mid;
-          g_lo = g_mid;
-          if (side == 1) g_hi *= 0.5;
-          side = 1;
-        } else {
-          hi = mid;
-          g_hi = g_mid;
-          if (side == -1) g_lo *= 0.5;
-          side = -1;
-        }
-        if (g_mid == 0) break;
-      }
-      if (hi < first_fraction) {
-        first_fraction = hi;
-        first = event;
-      }
-    }
-
-    if (first == Event::kNone) {
-      rk4(controls, state, h, state, integrals);
+    if (!any_event) {
+      state = trial;
+      at_state = at_trial;
       report.elapsed += h;
+      if (integrals) {
+        for (int j = 0; j < kNumJoints; ++j) integrals->squared[j] += step_integrals.squared[j];
+        integrals->work += step_integrals.work;
+      }
     } else {
+      // Localise the earliest event by the Illinois method on the step fraction.
+      Event first = Event::kNone;
+      double first_fraction = 2.0;
+      const Event events[3] = {Event::kStanceKnee, Event::kSwingKnee, Event::kHeelStrike};
+      for (int i = 0; i < 3; ++i) {
+        if (!triggered[i]) continue;
+        const Event event = events[i];
+        double lo = 0, hi = 1;
+        double g_lo = eventValue(event, state), g_hi = eventValue(event, trial);
+        int side = 0;
+        WalkerState probe;
+        while ((hi - lo) * h > tolerance) {
+          double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+          if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
+          rk4(controls, state, mid * h, probe, nullptr);
+          const double g_mid = eventValue(event, probe);
+          if (g_mid > 0) {
+            lo = mid;
+            g_lo = g_mid;
+            if (side == 1) g_hi *= 0.5;
+            side = 1;
+          } else {
+            hi = mid;
+            g_hi = g_mid;
+            if (side == -1) g_lo *= 0.5;
+            side = -1;
+          }
+          if (g_mid == 0) break;
+        }
+        if (hi < first_fraction) {
+          first_fraction = hi;
+          first = event;
+        }
+      }
       const double h_event = first_fraction * h;
       rk4(controls, state, h_event, state, integrals);
       report.elapsed += h_event;
@@ -212,13 +224,14 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
         applyKneeLimit(state, first == Event::kStanceKnee ? 0 : 1);
         ++report.knee_limit_events;
       }
+      at_state = geometry(state.q);
     }
 
     // A knee held on its limit leaves it when the motion flexes it again.
     for (int k = 0; k < kNumKnees; ++k)
       if (state.knee_on_limit[k] && kneeFlexion(state.q, k) > 1e-12) state.knee_on_limit[k] = false;
 
-    if (hasFallen(state)) {
+    if (hasFallen(state, at_state)) {
       state.fallen = true;
       report.fell = true;
       return report;

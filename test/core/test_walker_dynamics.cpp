@@ -33,7 +33,8 @@ const WalkerModel kPerson = scaleToPerson(BodyProportions{}, 1.75, 70);
 EquationsOfMotion eomAt(const KinematicMap& map, double slope, const Vector5& q,
                         const Vector5& qdot) {
   EquationsOfMotion eom;
-  equationsOfMotion(map, kPerson.gravity, slope, q, qdot, Vector5::Zero(), eom);
+  equationsOfMotion(inertiaCoefficients(map), kPerson.gravity, slope, q, qdot, Vector5::Zero(),
+                    eom);
   return eom;
 }
 
@@ -220,7 +221,8 @@ TEST(WalkerDynamics, VirtualTorquesHoldOnlyKneesThatWouldHyperextend) {
     EquationsOfMotion eom;
     JointTorques t{};
     t[kStanceKnee] = push;  // positive flexes the knee, negative hyperextends it
-    equationsOfMotion(map, kPerson.gravity, 0, q, still, generalisedForce(t), eom);
+    equationsOfMotion(inertiaCoefficients(map), kPerson.gravity, 0, q, still, generalisedForce(t),
+                      eom);
     KneeFlags active;
     const Vector5 acc = constrainedAcceleration(eom, {true, false}, &active);
     if (push < 0) {

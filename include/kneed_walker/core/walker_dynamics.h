@@ -59,12 +59,29 @@ JointTorques jointTorques(const WalkerControls& controls, const Vector5& q, cons
 // torso's reaction: the stance thigh, which carries the torso), ankle stance shank/ground.
 Vector5 generalisedForce(const JointTorques& torques);
 
+// The TMT sums over bodies condensed into constants of the map. With the velocity
+// coefficients T_bj = i w_bj e^{i q_j} (plus −R on the rolling coordinate),
+//   M_jk = Re(C_jk e^{i(q_k − q_j)}) + R Im(D_j e^{i q_j}) [k = roll] + R Im(D_k e^{i q_k}) [j = roll]
+//          + R² m [j = k = roll] + I_j [j = k],
+//   F_j  = Σ_k q̇_k² Im(C_jk e^{i(q_k − q_j)}) + Re(conj(i D_j e^{i q_j}) g) + rolling terms,
+// with C_jk = Σ_b m_b conj(w_bj) w_bk and D_j = Σ_b m_b w_bj: one complex product per
+// coordinate pair, the hot path of every particle.
+struct InertiaCoefficients {
+  std::array<std::array<Point, kNumCoordinates>, kNumCoordinates> c{};  // C_jk (Hermitian)
+  std::array<Point, kNumCoordinates> d{};                               // D_j
+  std::array<double, kNumCoordinates> inertia{};  // Σ I_b of the bodies whose angle is q_j
+  double total_mass = 0;
+  double foot_radius = 0;
+  int rolling_coordinate = kStanceShank;
+};
+InertiaCoefficients inertiaCoefficients(const KinematicMap& map);
+
 // M(q) and F(q, q̇) of eq. 4 for the given applied generalised forces.
 struct EquationsOfMotion {
   Matrix5 mass;   // M(q), symmetric positive definite
   Vector5 force;  // F(q, q̇, θ, γ)
 };
-void equationsOfMotion(const KinematicMap& map, double gravity, double ground_slope,
+void equationsOfMotion(const InertiaCoefficients& inertia, double gravity, double ground_slope,
                        const Vector5& q, const Vector5& qdot, const Vector5& applied_force,
                        EquationsOfMotion& out);
 

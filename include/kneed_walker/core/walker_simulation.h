@@ -96,10 +96,18 @@ class WalkerSimulator {
   AdvanceReport run(const WalkerControls& controls, WalkerState& state, double duration,
                     bool stop_at_heel_strike, TorqueIntegrals* integrals) const;
   void applyKneeLimit(WalkerState& state, int knee) const;
-  bool hasFallen(const WalkerState& state) const;
+  // What the event and fall checks need of a pose, from one set of phasors.
+  struct Geometry {
+    double swing_clearance;   // swing sole height above the ground
+    double swing_foot_ahead;  // swing foot centre ahead of the stance foot centre
+    double hip_height;
+  };
+  Geometry geometry(const Vector5& q) const;
+  bool hasFallen(const WalkerState& state, const Geometry& geometry) const;
 
   WalkerModel model_;
   KinematicMap map_;
+  InertiaCoefficients inertia_;
   SimulationOptions options_;
   double natural_time_;
 };
