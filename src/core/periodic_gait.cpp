@@ -118,4 +118,23 @@ PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerCont
   return gait;
 }
 
+PeriodicGait mcGeerPassiveGait() {
+  const WalkerSimulator simulator(mcGeerPassiveWalker());
+  WalkerControls passive;
+  passive.ground_slope = kMcGeerSlope;
+  WalkerState guess;
+  guess.q << 0, 0.27, 0.27, -0.44, -0.44;
+  guess.qdot << 0, -0.355, -0.355, 0.065, -0.625;
+  guess.knee_on_limit = {true, false};
+  return findPeriodicGait(simulator, passive, guess);
+}
+
+WalkerState fromDimensionless(const WalkerState& s, const WalkerSimulator& simulator) {
+  WalkerState scaled = s;
+  scaled.qdot = s.qdot / simulator.naturalTime();
+  scaled.stance_foot_x = s.stance_foot_x * simulator.model().legLength();
+  scaled.time_in_stride = s.time_in_stride * simulator.naturalTime();
+  return scaled;
+}
+
 }  // namespace kneed_walker

@@ -145,10 +145,12 @@ WalkerModel scaleToPerson(const BodyProportions& p, double height_m, double mass
   return scaleProportions(p, p.leg_length_per_height * height_m, mass_kg, gravity);
 }
 
-WalkerModel mcGeerPassiveWalker() {
+BodyProportions mcGeerProportions() {
   BodyProportions p;
   p.torso.com_along = 0.0;  // the torso becomes McGeer's hip point mass
-  return scaleProportions(p, 1.0, 1.0, 1.0);
+  return p;
 }
+
+WalkerModel mcGeerPassiveWalker() { return scaleProportions(mcGeerProportions(), 1.0, 1.0, 1.0); }
 
 }  // namespace kneed_walker

@@ -27,22 +27,13 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Walkers spread over one stride of McGeer's passive gait, scaled to a 1.75 m, 70 kg person
-// (angles are dimensionless; rates scale with 1/√(L/g)), each slightly perturbed.
+// Walkers spread over one stride of McGeer's passive gait, scaled to the simulator's
+// person (McGeer's proportions: the torso mass at the hip), each slightly perturbed.
 std::vector<kw::WalkerState> gaitBatch(const kw::WalkerSimulator& sim,
                                        const kw::WalkerControls& controls, int count,
                                        unsigned seed) {
-  const kw::WalkerSimulator dimensionless(kw::mcGeerPassiveWalker());
-  kw::WalkerControls passive;
-  passive.ground_slope = controls.ground_slope;
-  kw::WalkerState guess;
-  guess.q << 0, 0.27, 0.27, -0.44, -0.44;
-  guess.qdot << 0, -0.355, -0.355, 0.065, -0.625;
-  guess.knee_on_limit = {true, false};
-  const kw::PeriodicGait gait = kw::findPeriodicGait(dimensionless, passive, guess);
-  kw::WalkerState start = gait.start;
-  start.qdot /= sim.naturalTime();
-
+  const kw::PeriodicGait gait = kw::mcGeerPassiveGait();
+  const kw::WalkerState start = kw::fromDimensionless(gait.start, sim);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> phase(0, gait.stride.duration * sim.naturalTime());
   std::normal_distribution<double> noise(0, 0.01);
@@ -70,12 +61,12 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "random seed of the batch");
   CLI11_PARSE(app, argc, argv);
 
-  const kw::WalkerModel person = kw::scaleToPerson(kw::BodyProportions{}, 1.75, 70);
+  const kw::WalkerModel person = kw::scaleToPerson(kw::mcGeerProportions(), 1.75, 70);
   kw::SimulationOptions options;
   options.max_step = max_step;
   const kw::WalkerSimulator sim(person, options);
   kw::WalkerControls controls;
-  controls.ground_slope = -0.0456;
+  controls.ground_slope = kw::kMcGeerSlope;
   const double frame_s = 1.0 / fps;
   const std::vector<kw::WalkerState> initial = gaitBatch(sim, controls, particles, seed);
 

@@ -53,4 +53,15 @@ struct PeriodicGait {
 PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerControls& controls,
                               const WalkerState& guess, const PeriodicGaitOptions& options = {});
 
+// The slope of McGeer's passive walker, rad (negative: downhill).
+constexpr double kMcGeerSlope = -0.0456;
+
+// McGeer's passive kneed walker's periodic gait down kMcGeerSlope, in dimensionless units:
+// a ready-made walking motion (for benchmarks and pictures) until optimal gaits exist.
+PeriodicGait mcGeerPassiveGait();
+
+// A dimensionless state (leg length 1, g = 1) for a walker of another size: angles unchanged,
+// rates divided by the natural time √(L/g), positions times the leg length.
+WalkerState fromDimensionless(const WalkerState& dimensionless, const WalkerSimulator& simulator);
+
 }  // namespace kneed_walker

@@ -18,6 +18,7 @@
 #include <array>
 #include <complex>
 
+#include "kneed_walker/core/sincos.h"
 #include "kneed_walker/core/walker_model.h"
 
 namespace kneed_walker {
@@ -78,7 +79,11 @@ inline Point stanceFootCentre(const KinematicMap& map, const Vector5& q, double 
 // e^{i q_j} for all j: computed once per state and shared by every point.
 inline std::array<Point, kNumCoordinates> phasors(const Vector5& q) {
   std::array<Point, kNumCoordinates> p;
-  for (int j = 0; j < kNumCoordinates; ++j) p[j] = std::polar(1.0, q[j]);
+  for (int j = 0; j < kNumCoordinates; ++j) {
+    double s, c;
+    sinCos(q[j], s, c);
+    p[j] = Point(c, s);
+  }
   return p;
 }
 

@@ -66,9 +66,12 @@ BodyProportions loadBodyProportions(const std::string& path);
 WalkerModel scaleToPerson(const BodyProportions& proportions, double height_m, double mass_kg,
                           double gravity = 9.81);
 
-// McGeer's passive kneed walker in dimensionless units (L = 1, total mass 1, g = 1), with the
-// torso reduced to his hip mass: its centre of mass at the hip (com_along = 0), so it no
-// longer couples to the legs. Walks passively down a 0.0456 rad slope.
+// McGeer's passive kneed walker's proportions: the defaults with the torso reduced to his
+// hip mass (centre of mass at the hip, com_along = 0), so that it no longer couples to the
+// legs. Scaled to a person, it walks passively down a 0.0456 rad slope.
+BodyProportions mcGeerProportions();
+
+// McGeer's passive kneed walker in dimensionless units (L = 1, total mass 1, g = 1).
 WalkerModel mcGeerPassiveWalker();
 
 }  // namespace kneed_walker
