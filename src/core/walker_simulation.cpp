@@ -10,6 +10,39 @@ namespace {
 // The events that can end a trial step.
 enum class Event { kNone, kStanceKnee, kSwingKnee, kHeelStrike };
 
+// The step fraction in [0, 1] where g(q) crosses zero on the cubic Hermite interpolant of q
+// through the step's ends (q and q̇ at both), by the Illinois method on the interpolant.
+template <typename EventFunction>
+double interpolatedEventFraction(EventFunction g, const WalkerState& a, const WalkerState& b,
+                                 double h) {
+  auto at = [&](double s) {
+    const double s2 = s * s, s3 = s2 * s;
+    const Vector5 q = (2 * s3 - 3 * s2 + 1) * a.q + ((s3 - 2 * s2 + s) * h) * a.qdot +
+                      (-2 * s3 + 3 * s2) * b.q + ((s3 - s2) * h) * b.qdot;
+    return g(q);
+  };
+  double lo = 0, hi = 1, g_lo = at(0), g_hi = at(1);
+  if (!(g_lo > 0 && g_hi <= 0)) return 0.5;
+  int side = 0;
+  for (int i = 0; i < 100 && hi - lo > 1e-13; ++i) {
+    double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+    if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
+    const double g_mid = at(mid);
+    if (g_mid > 0) {
+      lo = mid;
+      g_lo = g_mid;
+      if (side == 1) g_hi *= 0.5;
+      side = 1;
+    } else {
+      hi = mid;
+      g_hi = g_mid;
+      if (side == -1) g_lo *= 0.5;
+      side = -1;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace
 
 struct WalkerSimulator::Derivative {
@@ -146,11 +179,11 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
   // Event functions, positive before the event: the flexion of a free knee, and the
   // swing-sole clearance. A heel strike needs the swing foot ahead of the stance foot; a foot
   // that scuffs the ground while passing is ignored, as in McGeer's walkers.
-  auto eventValue = [&](Event event, const WalkerState& s) {
+  auto eventValue = [&](Event event, const Vector5& q) {
     switch (event) {
-      case Event::kStanceKnee: return kneeFlexion(s.q, 0);
-      case Event::kSwingKnee: return kneeFlexion(s.q, 1);
-      case Event::kHeelStrike: return swingFootClearance(map_, s.q);
+      case Event::kStanceKnee: return kneeFlexion(q, 0);
+      case Event::kSwingKnee: return kneeFlexion(q, 1);
+      case Event::kHeelStrike: return swingFootClearance(map_, q);
       case Event::kNone: break;
     }
     return 1.0;
@@ -188,14 +221,36 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
         if (!triggered[i]) continue;
         const Event event = events[i];
         double lo = 0, hi = 1;
-        double g_lo = eventValue(event, state), g_hi = eventValue(event, trial);
-        int side = 0;
+        double g_lo = eventValue(event, state.q), g_hi = eventValue(event, trial.q);
         WalkerState probe;
+        // Start from the root on the cubic Hermite interpolant of q through both ends of the
+        // step (accurate to O(h⁴), no integration), then bracket it tightly with a second
+        // probe just beyond, on the side where the root lies.
+        auto probeAt = [&](double at) {
+          rk4(controls, state, at * h, probe, nullptr);
+          const double g = eventValue(event, probe.q);
+          if (g > 0) {
+            lo = at;
+            g_lo = g;
+          } else {
+            hi = at;
+            g_hi = g;
+          }
+        };
+        const double guess = interpolatedEventFraction(
+            [&](const Vector5& q) { return eventValue(event, q); }, state, trial, h);
+        if (guess > lo && guess < hi) {
+          probeAt(guess);
+          constexpr double kBracket = 1e-6;  // ≫ the interpolant's error in the step fraction
+          const double beyond = lo == guess ? guess + kBracket : guess - kBracket;
+          if (beyond > lo && beyond < hi) probeAt(beyond);
+        }
+        int side = 0;
         while ((hi - lo) * h > tolerance) {
           double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
           if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
           rk4(controls, state, mid * h, probe, nullptr);
-          const double g_mid = eventValue(event, probe);
+          const double g_mid = eventValue(event, probe.q);
           if (g_mid > 0) {
             lo = mid;
             g_lo = g_mid;
