@@ -76,6 +76,19 @@ bool forEachKneeSubset(const KneeFlags& candidates, Accept accept) {
 
 constexpr double kComplementarityTolerance = 1e-12;
 
+// The flexion rows a_kᵀ of the knees in `knees`, placed at column `offset` of N columns.
+template <int N>
+typename ConstrainedSolve<N>::Rows kneeRows(const KneeFlags& knees, int offset = 0) {
+  typename ConstrainedSolve<N>::Rows g(0, N);
+  for (int k = 0; k < kNumKnees; ++k) {
+    if (!knees[k]) continue;
+    g.conservativeResize(g.rows() + 1, Eigen::NoChange);
+    g.row(g.rows() - 1).setZero();
+    g.row(g.rows() - 1).template segment<kNumCoordinates>(offset) = kneeFlexionRow(k).transpose();
+  }
+  return g;
+}
+
 // LDLᵀ factorisation of the 5×5 mass matrix, written out because it is the hot spot of every
 // particle's step: fixed loop bounds the compiler unrolls, no pivoting (M is positive
 // definite), no square roots; about 2× faster here than Eigen::LLT<Matrix5> (bench_dynamics).
@@ -276,12 +289,7 @@ Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const Knee
   Vector5 result = qdot;
   const double leave_rate = std::max(sticking_rate, -kComplementarityTolerance);
   const bool found = forEachKneeSubset(knees, [&](const KneeFlags& subset) {
-    Solve::Rows g(0, kNumCoordinates);
-    for (int k = 0; k < kNumKnees; ++k) {
-      if (!subset[k]) continue;
-      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
-      g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
-    }
+    const Solve::Rows g = kneeRows<kNumCoordinates>(subset);
     Vector5 candidate;
     Solve::VecR lambda;
     Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), candidate, lambda);
@@ -294,12 +302,7 @@ Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const Knee
     return true;
   });
   if (!found) {
-    Solve::Rows g(0, kNumCoordinates);
-    for (int k = 0; k < kNumKnees; ++k) {
-      if (!knees[k]) continue;
-      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
-      g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
-    }
+    const Solve::Rows g = kneeRows<kNumCoordinates>(knees);
     Solve::VecR lambda;
     Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), result, lambda);
   }
@@ -308,12 +311,7 @@ Vector5 projectKneeVelocity(const Matrix5& mass, const Vector5& qdot, const Knee
 
 Vector5 projectKneePosition(const Matrix5& mass, const Vector5& q, const KneeFlags& knees) {
   using Solve = ConstrainedSolve<kNumCoordinates>;
-  Solve::Rows g(0, kNumCoordinates);
-  for (int k = 0; k < kNumKnees; ++k) {
-    if (!knees[k]) continue;
-    g.conservativeResize(g.rows() + 1, Eigen::NoChange);
-    g.row(g.rows() - 1) = kneeFlexionRow(k).transpose();
-  }
+  const Solve::Rows g = kneeRows<kNumCoordinates>(knees);
   // min ½ ΔqᵀMΔq subject to a_kᵀ(q + Δq) = 0.
   const Eigen::LLT<Matrix5> llt(mass);
   Vector5 delta;
@@ -373,13 +371,9 @@ HeelStrike heelStrike(const KinematicMap& map, const Vector5& q, const Vector5& 
   HeelStrike result{};
   VecN z_after = z_dot;
   forEachKneeSubset(knees_on_limit, [&](const KneeFlags& subset) {
-    Solve::Rows g = contact;
-    for (int k = 0; k < kNumKnees; ++k) {
-      if (!subset[k]) continue;
-      g.conservativeResize(g.rows() + 1, Eigen::NoChange);
-      g.row(g.rows() - 1).setZero();
-      g.row(g.rows() - 1).tail<kNumCoordinates>() = kneeFlexionRow(k).transpose();
-    }
+    const Solve::Rows knee_rows = kneeRows<kN>(subset, 2);
+    Solve::Rows g(contact.rows() + knee_rows.rows(), kN);
+    g << contact, knee_rows;
     VecN z;
     Solve::VecR lambda;
     Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), z, lambda);

@@ -10,24 +10,15 @@ namespace {
 // The events that can end a trial step.
 enum class Event { kNone, kStanceKnee, kSwingKnee, kHeelStrike };
 
-// The step fraction in [0, 1] where g(q) crosses zero on the cubic Hermite interpolant of q
-// through the step's ends (q and q̇ at both), by the Illinois method on the interpolant.
-template <typename EventFunction>
-double interpolatedEventFraction(EventFunction g, const WalkerState& a, const WalkerState& b,
-                                 double h) {
-  auto at = [&](double s) {
-    const double s2 = s * s, s3 = s2 * s;
-    const Vector5 q = (2 * s3 - 3 * s2 + 1) * a.q + ((s3 - 2 * s2 + s) * h) * a.qdot +
-                      (-2 * s3 + 3 * s2) * b.q + ((s3 - s2) * h) * b.qdot;
-    return g(q);
-  };
-  double lo = 0, hi = 1, g_lo = at(0), g_hi = at(1);
-  if (!(g_lo > 0 && g_hi <= 0)) return 0.5;
+// Narrows a bracket [lo, hi] with g(lo) > 0 ≥ g(hi) around the root of g by the Illinois
+// method (regula falsi that halves a stale end's value), until it is no wider than `width`.
+template <typename Function>
+void illinois(Function g, double& lo, double& hi, double g_lo, double g_hi, double width) {
   int side = 0;
-  for (int i = 0; i < 100 && hi - lo > 1e-13; ++i) {
+  for (int i = 0; i < 200 && hi - lo > width; ++i) {
     double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
     if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
-    const double g_mid = at(mid);
+    const double g_mid = g(mid);
     if (g_mid > 0) {
       lo = mid;
       g_lo = g_mid;
@@ -39,7 +30,25 @@ double interpolatedEventFraction(EventFunction g, const WalkerState& a, const Wa
       if (side == -1) g_lo *= 0.5;
       side = -1;
     }
+    if (g_mid == 0) break;
   }
+}
+
+// The step fraction in [0, 1] where g(q) crosses zero on the cubic Hermite interpolant of q
+// through the step's ends (q and q̇ at both): no integration needed.
+template <typename EventFunction>
+double interpolatedEventFraction(EventFunction g, const WalkerState& a, const WalkerState& b,
+                                 double h) {
+  auto at = [&](double s) {
+    const double s2 = s * s, s3 = s2 * s;
+    const Vector5 q = (2 * s3 - 3 * s2 + 1) * a.q + ((s3 - 2 * s2 + s) * h) * a.qdot +
+                      (-2 * s3 + 3 * s2) * b.q + ((s3 - s2) * h) * b.qdot;
+    return g(q);
+  };
+  double lo = 0, hi = 1;
+  const double g_lo = at(0), g_hi = at(1);
+  if (!(g_lo > 0 && g_hi <= 0)) return 0.5;
+  illinois(at, lo, hi, g_lo, g_hi, 1e-13);
   return 0.5 * (lo + hi);
 }
 
@@ -245,25 +254,12 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
           const double beyond = lo == guess ? guess + kBracket : guess - kBracket;
           if (beyond > lo && beyond < hi) probeAt(beyond);
         }
-        int side = 0;
-        while ((hi - lo) * h > tolerance) {
-          double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
-          if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
-          rk4(controls, state, mid * h, probe, nullptr);
-          const double g_mid = eventValue(event, probe.q);
-          if (g_mid > 0) {
-            lo = mid;
-            g_lo = g_mid;
-            if (side == 1) g_hi *= 0.5;
-            side = 1;
-          } else {
-            hi = mid;
-            g_hi = g_mid;
-            if (side == -1) g_lo *= 0.5;
-            side = -1;
-          }
-          if (g_mid == 0) break;
-        }
+        illinois(
+            [&](double at) {
+              rk4(controls, state, at * h, probe, nullptr);
+              return eventValue(event, probe.q);
+            },
+            lo, hi, g_lo, g_hi, tolerance / h);
         if (hi < first_fraction) {
           first_fraction = hi;
           first = event;
