@@ -9,21 +9,46 @@
 namespace kneed_walker {
 namespace {
 
-// The shank coordinate that a locked knee k ties to its thigh.
+// The shank and thigh coordinates of knee k.
 constexpr int kShankOf[kNumKnees] = {kStanceShank, kSwingShank};
 constexpr int kThighOf[kNumKnees] = {kStanceThigh, kSwingThigh};
 
-bool isTiedShank(const KneeFlags& locked, int coordinate) {
+// Whether coordinate j's angle (or rate) is tied to its thigh's in these modes.
+bool angleTied(const KneeModes& modes, int j) {
   for (int k = 0; k < kNumKnees; ++k)
-    if (locked[k] && kShankOf[k] == coordinate) return true;
+    if (modes[k] != KneeMode::kBent && kShankOf[k] == j) return true;
+  return false;
+}
+bool rateTied(const KneeModes& modes, int j) {
+  for (int k = 0; k < kNumKnees; ++k)
+    if (modes[k] == KneeMode::kLocked && kShankOf[k] == j) return true;
   return false;
 }
 
 }  // namespace
 
+KneeModes kneeModes(const WalkerState& state) {
+  KneeModes modes;
+  for (int k = 0; k < kNumKnees; ++k) {
+    if (state.knee_on_limit[k])
+      modes[k] = KneeMode::kLocked;
+    else if (kneeFlexion(state.q, k) <= 1e-12)
+      modes[k] = KneeMode::kAtLimit;
+    else
+      modes[k] = KneeMode::kBent;
+  }
+  return modes;
+}
+
+int GaitCoordinates::angles() const {
+  int n = 0;
+  for (int j = 0; j < kNumCoordinates; ++j) n += !angleTied(modes_, j);
+  return n;
+}
+
 int GaitCoordinates::size() const {
-  int n = 2 * kNumCoordinates;
-  for (bool l : locked_) n -= l ? 2 : 0;
+  int n = angles();
+  for (int j = 0; j < kNumCoordinates; ++j) n += !rateTied(modes_, j);
   return n;
 }
 
@@ -31,9 +56,9 @@ GaitVector GaitCoordinates::reduce(const WalkerState& state) const {
   GaitVector r(size());
   int i = 0;
   for (int j = 0; j < kNumCoordinates; ++j)
-    if (!isTiedShank(locked_, j)) r[i++] = state.q[j];
+    if (!angleTied(modes_, j)) r[i++] = state.q[j];
   for (int j = 0; j < kNumCoordinates; ++j)
-    if (!isTiedShank(locked_, j)) r[i++] = state.qdot[j];
+    if (!rateTied(modes_, j)) r[i++] = state.qdot[j];
   return r;
 }
 
@@ -41,31 +66,33 @@ WalkerState GaitCoordinates::expand(const GaitVector& r) const {
   WalkerState s;
   int i = 0;
   for (int j = 0; j < kNumCoordinates; ++j)
-    if (!isTiedShank(locked_, j)) s.q[j] = r[i++];
+    if (!angleTied(modes_, j)) s.q[j] = r[i++];
   for (int j = 0; j < kNumCoordinates; ++j)
-    if (!isTiedShank(locked_, j)) s.qdot[j] = r[i++];
+    if (!rateTied(modes_, j)) s.qdot[j] = r[i++];
   for (int k = 0; k < kNumKnees; ++k) {
-    if (!locked_[k]) continue;
+    if (modes_[k] == KneeMode::kBent) continue;
     s.q[kShankOf[k]] = s.q[kThighOf[k]];
-    s.qdot[kShankOf[k]] = s.qdot[kThighOf[k]];
+    if (modes_[k] == KneeMode::kLocked) s.qdot[kShankOf[k]] = s.qdot[kThighOf[k]];
+    s.knee_on_limit[k] = modes_[k] == KneeMode::kLocked;
   }
-  s.knee_on_limit = locked_;
   return s;
 }
 
 PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerControls& controls,
                               const WalkerState& guess, const PeriodicGaitOptions& options) {
-  const GaitCoordinates coordinates(guess.knee_on_limit);
+  const GaitCoordinates coordinates(kneeModes(guess));
   const int n = coordinates.size();
   PeriodicGait gait;
   GaitVector x = coordinates.reduce(guess);
 
-  // Residual S(x) − x; a stride that falls or ends with other knees locked has no residual.
+  // Residual S(x) − x; a stride that falls has none. (Near a gait whose knee barely leaves
+  // its limit, a difference probe may end with another knee pattern; the probe still counts,
+  // and the solution itself must end with the start's pattern to converge.)
   auto residual = [&](const GaitVector& at, StrideResult* stride_out) -> GaitVector {
     const StrideResult stride = simulator.stride(controls, coordinates.expand(at));
     if (stride_out) *stride_out = stride;
     GaitVector r = coordinates.reduce(stride.end) - at;
-    if (!stride.completed || stride.end.knee_on_limit != coordinates.locked()) r.setConstant(std::numeric_limits<double>::quiet_NaN());
+    if (!stride.completed) r.setConstant(std::numeric_limits<double>::quiet_NaN());
     return r;
   };
 
@@ -110,7 +137,7 @@ PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerCont
   gait.stride = stride;
   gait.residual = r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::infinity();
   gait.converged = stride.completed && gait.residual < options.residual_tolerance &&
-                   stride.end.knee_on_limit == guess.knee_on_limit;
+                   kneeModes(stride.end) == coordinates.modes();
   if (r.allFinite()) {
     gait.stride_jacobian = jacobianAt(x) + GaitMatrix::Identity(n, n);
     gait.eigenvalues = gait.stride_jacobian.eigenvalues();

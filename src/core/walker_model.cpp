@@ -151,6 +151,12 @@ BodyProportions mcGeerProportions() {
   return p;
 }
 
-WalkerModel mcGeerPassiveWalker() { return scaleProportions(mcGeerProportions(), 1.0, 1.0, 1.0); }
+WalkerModel dimensionlessWalker(const BodyProportions& proportions) {
+  const auto problems = validate(proportions);
+  if (!problems.empty()) throw std::invalid_argument("dimensionlessWalker: " + problems.front());
+  return scaleProportions(proportions, 1.0, 1.0, 1.0);
+}
+
+WalkerModel mcGeerPassiveWalker() { return dimensionlessWalker(mcGeerProportions()); }
 
 }  // namespace kneed_walker

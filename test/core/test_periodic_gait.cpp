@@ -8,17 +8,28 @@
 namespace kneed_walker {
 namespace {
 
-TEST(PeriodicGait, ReducedCoordinatesRoundTrip) {
-  const GaitCoordinates coordinates({true, false});
-  EXPECT_EQ(coordinates.size(), 8);
+TEST(PeriodicGait, ReducedCoordinatesRoundTripInEachKneeMode) {
   WalkerState s;
-  s.q << 0.1, 0.2, 0.2, -0.3, -0.5;
+  s.q << 0.1, 0.2, 0.2, -0.3, -0.3;
   s.qdot << 0.0, -1.0, -1.0, 0.4, 0.9;
   s.knee_on_limit = {true, false};
-  const WalkerState back = coordinates.expand(coordinates.reduce(s));
+  const KneeModes modes = kneeModes(s);
+  EXPECT_EQ(modes[0], KneeMode::kLocked);
+  EXPECT_EQ(modes[1], KneeMode::kAtLimit) << "straight swing knee flexing away";
+  const GaitCoordinates coordinates(modes);
+  EXPECT_EQ(coordinates.size(), 7);
+  EXPECT_EQ(coordinates.angles(), 3);
+  WalkerState back = coordinates.expand(coordinates.reduce(s));
   EXPECT_EQ(back.q, s.q);
   EXPECT_EQ(back.qdot, s.qdot);
   EXPECT_EQ(back.knee_on_limit, s.knee_on_limit);
+
+  s.q[kSwingShank] = -0.5;  // a bent swing knee is free
+  const GaitCoordinates bent(kneeModes(s));
+  EXPECT_EQ(bent.size(), 8);
+  back = bent.expand(bent.reduce(s));
+  EXPECT_EQ(back.q, s.q);
+  EXPECT_EQ(back.qdot, s.qdot);
 }
 
 // McGeer's passive kneed walker (torso reduced to a hip mass) down 0.0456 rad: a periodic

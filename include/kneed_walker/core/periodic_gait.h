@@ -2,10 +2,11 @@
 // found by Newton's method on the stride map with a finite-difference Jacobian, and the
 // linearised stride map's eigenvalues (the gait's stability: |λ| < 1 for a stable gait).
 //
-// A knee that is on its limit just after heel strike has shank angle = thigh angle and the
-// same rates, so the stride map acts on the manifold of those constraints: the search runs in
-// the reduced coordinates that leave out each locked knee's shank angle and rate (differences
-// across the knee-lock would otherwise straddle an inelastic knee collision).
+// Just after heel strike each knee is in one of three modes: locked on its limit (shank angle
+// and rate equal the thigh's), at its limit but flexing away (angles equal, rates free), or
+// bent (free). The stride map acts on the manifold these constraints define, so the search
+// runs in reduced coordinates that leave out the tied shank entries (differences across a
+// knee limit would otherwise straddle a knee collision or a projection).
 #pragma once
 
 #include <Eigen/Core>
@@ -18,19 +19,25 @@ using GaitVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 2 * kNumCoordinat
 using GaitMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * kNumCoordinates,
                                  2 * kNumCoordinates>;
 
-// Reduced coordinates of a post-heel-strike state: q and q̇ without the shank entries of the
-// knees locked in `locked`.
+enum class KneeMode : std::uint8_t { kLocked, kAtLimit, kBent };
+using KneeModes = std::array<KneeMode, kNumKnees>;
+
+// The knee modes of a post-heel-strike state.
+KneeModes kneeModes(const WalkerState& state);
+
+// Reduced coordinates of a post-heel-strike state in given knee modes.
 class GaitCoordinates {
  public:
-  explicit GaitCoordinates(const KneeFlags& locked) : locked_(locked) {}
+  explicit GaitCoordinates(const KneeModes& modes) : modes_(modes) {}
   int size() const;
+  int angles() const;  // the first angles() entries are angles, the rest rates
   GaitVector reduce(const WalkerState& state) const;
   // A post-heel-strike state (stance foot at x0 = 0, left stance) from reduced coordinates.
   WalkerState expand(const GaitVector& reduced) const;
-  const KneeFlags& locked() const { return locked_; }
+  const KneeModes& modes() const { return modes_; }
 
  private:
-  KneeFlags locked_;
+  KneeModes modes_;
 };
 
 struct PeriodicGaitOptions {
@@ -49,7 +56,7 @@ struct PeriodicGait {
   Eigen::VectorXcd eigenvalues;  // of stride_jacobian
 };
 
-// Newton's method from `guess` (its knee flags choose the reduced coordinates).
+// Newton's method from `guess` (its knee modes choose the reduced coordinates).
 PeriodicGait findPeriodicGait(const WalkerSimulator& simulator, const WalkerControls& controls,
                               const WalkerState& guess, const PeriodicGaitOptions& options = {});
 

@@ -71,7 +71,11 @@ WalkerModel scaleToPerson(const BodyProportions& proportions, double height_m, d
 // legs. Scaled to a person, it walks passively down a 0.0456 rad slope.
 BodyProportions mcGeerProportions();
 
-// McGeer's passive kneed walker in dimensionless units (L = 1, total mass 1, g = 1).
+// A walker with these proportions in dimensionless units (leg length 1, body mass 1, g = 1),
+// the units of the gait optimisation (paper §3.3) and of McGeer's walkers.
+WalkerModel dimensionlessWalker(const BodyProportions& proportions);
+
+// McGeer's passive kneed walker in dimensionless units.
 WalkerModel mcGeerPassiveWalker();
 
 }  // namespace kneed_walker

@@ -1,0 +1,76 @@
+// Efficient cyclic gaits (paper §3.3): minimise the effort of eq. 9
+//   E(x0, θ, γ) = β_ι ι^α + Σ_j (β_j / T) ∫₀ᵀ τ_j² dt
+// over the spring parameters θ, the toe-off impulse ι and the post-heel-strike state x0,
+// subject to eq. 10: S(x0, θ, γ) = x0, V = v, L = ℓ. Solved with NLopt's SLSQP with
+// finite-difference gradients. Everything is in dimensionless units (leg length 1, body
+// mass 1, g = 1), in which the paper's weights are given; a gait scales to any person by
+// Froude similarity (speed × √(gL), step length × L, time × √(L/g)).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kneed_walker/core/periodic_gait.h"
+
+namespace kneed_walker {
+
+// What a gait must achieve: dimensionless speed v/√(gL), step length ℓ/L, slope γ (rad,
+// positive uphill).
+struct GaitTarget {
+  double speed = 0;
+  double step_length = 0;
+  double slope = 0;
+};
+
+// The paper's weights of eq. 9.
+struct EffortWeights {
+  double impulse = 0.62;         // β_ι
+  double impulse_exponent = 1.5;  // α
+  double stance_knee = 0.3;      // β_K1
+  double swing_knee = 0.007;     // β_K2
+  double hip = 0.007;            // β_H
+  double torso = 0.034;          // β_To
+};
+
+// Effort E of eq. 9 for a simulated stride and its impulse.
+double gaitEffort(const StrideResult& stride, double toe_off_impulse, const EffortWeights& weights);
+
+// One optimised gait: the controls and the start of its periodic stride, and how well the
+// constraints hold.
+struct OptimalGait {
+  GaitTarget target;
+  WalkerControls controls;   // θ, ι and γ (no torque offsets)
+  WalkerState start;         // post-heel-strike state x0
+  StrideResult stride;       // S(x0, θ, γ)
+  double effort = 0;         // E of eq. 9
+  double periodicity_residual = 0;  // max |S(x0) − x0| over the full state
+  double speed_error = 0;           // relative |V − v| / v
+  double step_length_error = 0;     // relative |L − ℓ| / ℓ
+  int nlopt_result = 0;             // nlopt::result code of the last solve
+  int evaluations = 0;              // strides simulated
+  bool feasible() const {
+    return stride.completed && periodicity_residual < 1e-6 && speed_error < 0.01 &&
+           step_length_error < 0.01;
+  }
+};
+
+struct GaitOptimizerOptions {
+  EffortWeights weights;
+  int max_iterations = 1000;        // SLSQP objective evaluations
+  double constraint_tolerance = 1e-9;
+  double relative_tolerance = 1e-7;  // on the variables
+  double difference_step = 1e-6;     // central finite differences
+  SimulationOptions simulation;      // of the stride function
+};
+
+// Optimises the gait for `target`, starting from `start` (its controls and state; typically a
+// neighbouring solution). The knee modes of start.start (kneeModes) choose the reduced
+// coordinates of x0; a solution that ends in other modes is solved again in those.
+OptimalGait optimizeGait(const BodyProportions& proportions, const GaitTarget& target,
+                         const OptimalGait& start, const GaitOptimizerOptions& options = {});
+
+// A start for optimizeGait: McGeer's passive gait as the state, a stiff damped torso spring
+// to hold the torso up, no other torque.
+OptimalGait initialGaitGuess();
+
+}  // namespace kneed_walker

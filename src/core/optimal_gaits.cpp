@@ -1,0 +1,302 @@
+#include "kneed_walker/core/optimal_gaits.h"
+
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace kneed_walker {
+namespace {
+
+// The optimisation variables: θ and ι, then x0 in reduced coordinates.
+enum ControlVariable : int {
+  kStanceKneeStiffness = 0,
+  kStanceKneeDamping,
+  kSwingKneeStiffness,
+  kSwingKneeRestAngle,
+  kSwingKneeDamping,
+  kHipStiffness,
+  kTorsoStiffness,
+  kTorsoRestAngle,
+  kTorsoDamping,
+  kToeOffImpulse,
+  kNumControlVariables
+};
+
+// Bounds of the controls, dimensionless (torque unit M g L, time unit √(L/g)). The torso
+// spring must hold the torso up against gravity (its gravity torque about the hip is about
+// 0.23 φ), so κTo ≥ 0.5 and dTo ≥ 0.1; its rest angle stays within ±0.15 rad (the paper's
+// prior puts it at γ/3), else the optimum turns the torso spring into a constant hip motor
+// with the torso leaning far forward.
+constexpr double kControlLower[kNumControlVariables] = {0, 0, 0, 0, 0, 0, 0.5, -0.15, 0.1, 0};
+constexpr double kControlUpper[kNumControlVariables] = {30, 5, 5, 1.5, 5, 30, 50, 0.15, 20, 0.5};
+constexpr double kAngleBound = 1.3;  // rad, |q| of x0
+constexpr double kRateBound = 6.0;   // per natural time unit, |q̇| of x0
+
+void toControls(const double* x, double slope, WalkerControls& c) {
+  c = WalkerControls{};
+  c.springs.stance_knee_stiffness = x[kStanceKneeStiffness];
+  c.springs.stance_knee_damping = x[kStanceKneeDamping];
+  c.springs.swing_knee_stiffness = x[kSwingKneeStiffness];
+  c.springs.swing_knee_rest_angle = x[kSwingKneeRestAngle];
+  c.springs.swing_knee_damping = x[kSwingKneeDamping];
+  c.springs.hip_stiffness = x[kHipStiffness];
+  c.springs.torso_stiffness = x[kTorsoStiffness];
+  c.springs.torso_rest_angle = x[kTorsoRestAngle];
+  c.springs.torso_damping = x[kTorsoDamping];
+  c.toe_off_impulse = x[kToeOffImpulse];
+  c.ground_slope = slope;
+}
+
+void fromControls(const WalkerControls& c, double* x) {
+  x[kStanceKneeStiffness] = c.springs.stance_knee_stiffness;
+  x[kStanceKneeDamping] = c.springs.stance_knee_damping;
+  x[kSwingKneeStiffness] = c.springs.swing_knee_stiffness;
+  x[kSwingKneeRestAngle] = c.springs.swing_knee_rest_angle;
+  x[kSwingKneeDamping] = c.springs.swing_knee_damping;
+  x[kHipStiffness] = c.springs.hip_stiffness;
+  x[kTorsoStiffness] = c.springs.torso_stiffness;
+  x[kTorsoRestAngle] = c.springs.torso_rest_angle;
+  x[kTorsoDamping] = c.springs.torso_damping;
+  x[kToeOffImpulse] = c.toe_off_impulse;
+}
+
+// The problem as NLopt sees it. Objective and constraints at one x come from one stride, and
+// their gradients from one sweep of central differences, cached for both callbacks.
+class GaitProblem {
+ public:
+  GaitProblem(const WalkerSimulator& simulator, const GaitTarget& target,
+              const GaitCoordinates& coordinates, const GaitOptimizerOptions& options)
+      : sim_(simulator),
+        target_(target),
+        coordinates_(coordinates),
+        options_(options),
+        n_(kNumControlVariables + coordinates.size()),
+        m_(coordinates.size() + 2) {
+    lower_.assign(n_, 0);
+    upper_.assign(n_, 0);
+    for (int i = 0; i < kNumControlVariables; ++i) {
+      lower_[i] = kControlLower[i];
+      upper_[i] = kControlUpper[i];
+    }
+    const int angles = coordinates.angles();
+    for (int i = kNumControlVariables; i < n_; ++i) {
+      const bool angle = i - kNumControlVariables < angles;
+      lower_[i] = angle ? -kAngleBound : -kRateBound;
+      upper_[i] = angle ? kAngleBound : kRateBound;
+    }
+  }
+
+  int variables() const { return n_; }
+  int constraints() const { return m_; }
+  const std::vector<double>& lower() const { return lower_; }
+  const std::vector<double>& upper() const { return upper_; }
+  int evaluations() const { return evaluations_; }
+
+  std::vector<double> pack(const OptimalGait& gait) const {
+    std::vector<double> x(n_);
+    fromControls(gait.controls, x.data());
+    const GaitVector r = coordinates_.reduce(gait.start);
+    for (int i = 0; i < r.size(); ++i) x[kNumControlVariables + i] = r[i];
+    for (int i = 0; i < n_; ++i) x[i] = std::clamp(x[i], lower_[i], upper_[i]);
+    return x;
+  }
+
+  // The stride from x: controls and start state.
+  StrideResult simulate(const double* x, WalkerControls& controls, WalkerState& start) const {
+    toControls(x, target_.slope, controls);
+    GaitVector r(coordinates_.size());
+    for (int i = 0; i < r.size(); ++i) r[i] = x[kNumControlVariables + i];
+    start = coordinates_.expand(r);
+    ++evaluations_;
+    return sim_.stride(controls, start);
+  }
+
+  // Objective and constraints at x (no gradients).
+  double evaluate(const double* x, double* c) const {
+    WalkerControls controls;
+    WalkerState start;
+    const StrideResult stride = simulate(x, controls, start);
+    if (!stride.completed) {
+      // A fall: no periodic gait here. Large, finite values keep SLSQP's line search away.
+      for (int i = 0; i < m_; ++i) c[i] = 10.0;
+      return 1e3;
+    }
+    const GaitVector end = coordinates_.reduce(stride.end);
+    for (int i = 0; i < end.size(); ++i) c[i] = end[i] - x[kNumControlVariables + i];
+    c[m_ - 2] = stride.speed - target_.speed;
+    c[m_ - 1] = stride.step_length - target_.step_length;
+    return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
+  }
+
+  double objective(const double* x, double* grad) {
+    refresh(x, grad != nullptr);
+    if (grad) std::copy(grad_f_.begin(), grad_f_.end(), grad);
+    return f_;
+  }
+
+  void constraintValues(const double* x, double* c, double* grad) {
+    refresh(x, grad != nullptr);
+    std::copy(c_.begin(), c_.end(), c);
+    if (grad) std::copy(grad_c_.begin(), grad_c_.end(), grad);
+  }
+
+ private:
+  void refresh(const double* x, bool need_gradient) {
+    const bool same = !x_.empty() && std::equal(x_.begin(), x_.end(), x);
+    if (!same) {
+      x_.assign(x, x + n_);
+      c_.assign(m_, 0);
+      f_ = evaluate(x, c_.data());
+      has_gradient_ = false;
+    }
+    if (!need_gradient || has_gradient_) return;
+    grad_f_.assign(n_, 0);
+    grad_c_.assign(static_cast<size_t>(m_) * n_, 0);
+    std::vector<double> probe = x_, c_plus(m_), c_minus(m_);
+    for (int j = 0; j < n_; ++j) {
+      // Central differences, one-sided at a bound (ι ≥ 0 must stay ≥ 0).
+      const double h = options_.difference_step * std::max(1.0, std::abs(x_[j]));
+      const double up = std::min(x_[j] + h, upper_[j]);
+      const double down = std::max(x_[j] - h, lower_[j]);
+      probe[j] = up;
+      const double f_plus = evaluate(probe.data(), c_plus.data());
+      probe[j] = down;
+      const double f_minus = evaluate(probe.data(), c_minus.data());
+      probe[j] = x_[j];
+      const double width = up - down;
+      grad_f_[j] = (f_plus - f_minus) / width;
+      for (int i = 0; i < m_; ++i)
+        grad_c_[static_cast<size_t>(i) * n_ + j] = (c_plus[i] - c_minus[i]) / width;
+    }
+    has_gradient_ = true;
+  }
+
+  const WalkerSimulator& sim_;
+  GaitTarget target_;
+  GaitCoordinates coordinates_;
+  GaitOptimizerOptions options_;
+  int n_, m_;
+  std::vector<double> lower_, upper_;
+  mutable int evaluations_ = 0;
+  std::vector<double> x_, c_, grad_f_, grad_c_;
+  double f_ = 0;
+  bool has_gradient_ = false;
+};
+
+double objectiveCallback(unsigned, const double* x, double* grad, void* data) {
+  return static_cast<GaitProblem*>(data)->objective(x, grad);
+}
+
+void constraintCallback(unsigned, double* result, unsigned, const double* x, double* grad,
+                        void* data) {
+  static_cast<GaitProblem*>(data)->constraintValues(x, result, grad);
+}
+
+}  // namespace
+
+double gaitEffort(const StrideResult& stride, double toe_off_impulse, const EffortWeights& w) {
+  const JointTorques& sq = stride.integrals.squared;
+  const double torques = w.stance_knee * sq[kStanceKnee] + w.swing_knee * sq[kSwingKnee] +
+                         w.hip * sq[kHip] + w.torso * sq[kTorsoJoint];
+  return w.impulse * std::pow(toe_off_impulse, w.impulse_exponent) +
+         torques / std::max(stride.duration, 1e-9);
+}
+
+namespace {
+
+// One SLSQP solve in the knee modes of `start`, then a Newton polish of x0.
+OptimalGait optimizeInPattern(const WalkerSimulator& sim, const GaitTarget& target,
+                              const OptimalGait& start, const GaitOptimizerOptions& options) {
+  const GaitCoordinates coordinates(kneeModes(start.start));
+  GaitProblem problem(sim, target, coordinates, options);
+
+  nlopt::opt solver(nlopt::LD_SLSQP, static_cast<unsigned>(problem.variables()));
+  solver.set_lower_bounds(problem.lower());
+  solver.set_upper_bounds(problem.upper());
+  solver.set_min_objective(objectiveCallback, &problem);
+  solver.add_equality_mconstraint(
+      constraintCallback, &problem,
+      std::vector<double>(problem.constraints(), options.constraint_tolerance));
+  solver.set_xtol_rel(options.relative_tolerance);
+  solver.set_maxeval(options.max_iterations);
+
+  std::vector<double> x = problem.pack(start);
+  double effort = 0;
+  OptimalGait result;
+  try {
+    result.nlopt_result = solver.optimize(x, effort);
+  } catch (const nlopt::roundoff_limited&) {
+    result.nlopt_result = nlopt::ROUNDOFF_LIMITED;
+  } catch (const std::runtime_error&) {
+    result.nlopt_result = nlopt::FAILURE;
+  }
+
+  result.target = target;
+  result.stride = problem.simulate(x.data(), result.controls, result.start);
+  // SLSQP stops on its step tolerance with the constraints met to about 1e-6; Newton on the
+  // stride map at the optimised controls makes x0 periodic to rounding (changing V and L by
+  // about as much).
+  PeriodicGait polished = findPeriodicGait(sim, result.controls, result.start);
+  if (!polished.converged && polished.residual < 1e-6) {
+    // Periodic, but its knees end in other modes than x0 was given in (a knee that leaves its
+    // limit at zero rate is locked): start again from the end of the stride.
+    WalkerState from_end = polished.stride.end;
+    from_end.stance_foot_x = 0;
+    polished = findPeriodicGait(sim, result.controls, from_end);
+  }
+  if (polished.converged) {
+    result.start = polished.start;
+    result.stride = polished.stride;
+  }
+  result.effort = gaitEffort(result.stride, result.controls.toe_off_impulse, options.weights);
+  result.periodicity_residual =
+      std::max((result.stride.end.q - result.start.q).lpNorm<Eigen::Infinity>(),
+               (result.stride.end.qdot - result.start.qdot).lpNorm<Eigen::Infinity>());
+  if (!result.stride.completed || kneeModes(result.stride.end) != kneeModes(result.start))
+    result.periodicity_residual = std::numeric_limits<double>::infinity();
+  result.speed_error = std::abs(result.stride.speed - target.speed) / target.speed;
+  result.step_length_error =
+      std::abs(result.stride.step_length - target.step_length) / target.step_length;
+  result.evaluations = problem.evaluations();
+  return result;
+}
+
+}  // namespace
+
+OptimalGait optimizeGait(const BodyProportions& proportions, const GaitTarget& target,
+                         const OptimalGait& start, const GaitOptimizerOptions& options) {
+  const WalkerSimulator sim(dimensionlessWalker(proportions), options.simulation);
+  OptimalGait result = optimizeInPattern(sim, target, start, options);
+  // Which knees stay locked through heel strike is a property of the gait (a stance knee that
+  // flexes right at contact is not locked): when the solution ends in other knee modes than it
+  // started in, solve again in those.
+  if (!result.feasible() && result.stride.completed &&
+      kneeModes(result.stride.end) != kneeModes(result.start)) {
+    OptimalGait restart = result;
+    restart.start = result.stride.end;
+    restart.start.stance_foot_x = 0;
+    OptimalGait again = optimizeInPattern(sim, target, restart, options);
+    again.evaluations += result.evaluations;
+    if (again.feasible() || again.periodicity_residual < result.periodicity_residual)
+      result = again;
+  }
+  return result;
+}
+
+OptimalGait initialGaitGuess() {
+  const PeriodicGait passive = mcGeerPassiveGait();
+  OptimalGait guess;
+  guess.start = passive.start;
+  guess.start.q[kTorso] = 0;
+  guess.start.qdot[kTorso] = 0;
+  guess.controls.springs.torso_stiffness = 3.0;
+  guess.controls.springs.torso_damping = 1.0;
+  guess.controls.ground_slope = kMcGeerSlope;
+  guess.target = {passive.stride.speed, passive.stride.step_length, kMcGeerSlope};
+  guess.stride = passive.stride;
+  return guess;
+}
+
+}  // namespace kneed_walker
