@@ -299,4 +299,40 @@ OptimalGait initialGaitGuess() {
   return guess;
 }
 
+OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& target,
+                     const GaitOptimizerOptions& options, int target_steps) {
+  // Adaptive continuation on a homotopy parameter a ∈ [0, 1]: a failed step is retried at half
+  // the size from the last feasible gait, a successful one lets the next grow.
+  auto follow = [&](OptimalGait gait, auto solveAt) {
+    double reached = 0, step = 1.0 / target_steps;
+    while (reached < 1 && step > 1.0 / 512) {
+      const double next = std::min(1.0, reached + step);
+      const OptimalGait candidate = solveAt(next, gait);
+      if (candidate.feasible()) {
+        gait = candidate;
+        reached = next;
+        step *= 1.5;
+      } else {
+        step *= 0.5;
+        if (step <= 1.0 / 512) return candidate;  // give up: report the failure
+      }
+    }
+    return gait;
+  };
+  OptimalGait gait = initialGaitGuess();
+  gait = follow(gait, [&](double a, const OptimalGait& from) {
+    BodyProportions raised = proportions;
+    raised.torso.com_along *= a;  // from McGeer's hip mass up to the torso's place
+    return optimizeGait(raised, from.target, from, options);
+  });
+  if (!gait.feasible()) return gait;
+  const GaitTarget start = gait.target;
+  return follow(gait, [&](double a, const OptimalGait& from) {
+    const GaitTarget between{start.speed + a * (target.speed - start.speed),
+                             start.step_length + a * (target.step_length - start.step_length),
+                             start.slope + a * (target.slope - start.slope)};
+    return optimizeGait(proportions, between, from, options);
+  });
+}
+
 }  // namespace kneed_walker

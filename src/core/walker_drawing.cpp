@@ -67,4 +67,16 @@ void drawWalker(cv::Mat& image, const WalkerSimulator& sim, const WalkerState& s
              faded(kTrunkColour, alpha), thickness, cv::LINE_AA);
 }
 
+WalkerState drawStrip(cv::Mat& image, const WalkerSimulator& sim, const WalkerControls& controls,
+                      const WalkerState& start, double duration, int snapshots,
+                      const SideView& view) {
+  WalkerState state = start;
+  const double interval = duration / std::max(1, snapshots - 1);
+  for (int k = 0; k < snapshots && !state.fallen; ++k) {
+    drawWalker(image, sim, state, view, 0.35 + 0.65 * k / std::max(1, snapshots - 1));
+    if (k + 1 < snapshots) sim.advance(controls, state, interval);
+  }
+  return state;
+}
+
 }  // namespace kneed_walker

@@ -62,25 +62,18 @@ int main(int argc, char** argv) {
     }
   }
 
-  kw::WalkerState state = start;
-  const int frames = static_cast<int>(total_s * fps);
-  int snapshot = 0;
-  for (int f = 0; f <= frames; ++f) {
-    const double t = static_cast<double>(f) / fps;
-    if (t >= snapshot * total_s / (snapshots - 1) - 0.5 / fps) {
-      kw::drawWalker(strip, sim, state, view, 0.35 + 0.65 * snapshot / (snapshots - 1));
-      ++snapshot;
-    }
-    if (writer.isOpened()) {
+  const kw::WalkerState end = kw::drawStrip(strip, sim, controls, start, total_s, snapshots, view);
+  if (writer.isOpened()) {
+    kw::WalkerState state = start;
+    for (int f = 0; f <= static_cast<int>(total_s * fps) && !state.fallen; ++f) {
       cv::Mat frame(strip.size(), CV_8UC3, cv::Scalar(255, 255, 255));
       kw::drawGround(frame, view);
       kw::drawWalker(frame, sim, state, view);
-      cv::putText(frame, cv::format("t = %.2f s", t), {20, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.8,
-                  {0, 0, 0}, 2, cv::LINE_AA);
+      cv::putText(frame, cv::format("t = %.2f s", static_cast<double>(f) / fps), {20, 30},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.8, {0, 0, 0}, 2, cv::LINE_AA);
       writer.write(frame);
+      sim.advance(controls, state, 1.0 / fps);
     }
-    if (state.fallen) break;
-    sim.advance(controls, state, 1.0 / fps);
   }
   cv::putText(strip,
               cv::format("McGeer passive gait, %.2f m person, slope %.4f rad: step %.2f m, %.2f s",
@@ -91,7 +84,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "draw_walker: cannot write %s\n", out.c_str());
     return 1;
   }
-  std::printf("wrote %s (%d stick figures over %d strides, %.2f s)%s%s\n", out.c_str(), snapshot,
+  std::printf("wrote %s (%d stick figures over %d strides, %.2f s)%s%s\n", out.c_str(), snapshots,
               strides, total_s, video.empty() ? "" : " and ", video.c_str());
-  return state.fallen ? 1 : 0;
+  return end.fallen ? 1 : 0;
 }

@@ -73,4 +73,11 @@ OptimalGait optimizeGait(const BodyProportions& proportions, const GaitTarget& t
 // to hold the torso up, no other torque.
 OptimalGait initialGaitGuess();
 
+// A first optimal gait for `target` by continuation from McGeer's passive gait: the torso's
+// centre of mass is raised from the hip to its place in `proportions`, then the target moves
+// from the passive gait's to `target`, each step warm-started from the last. The result's
+// feasible() says whether every step succeeded.
+OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& target,
+                     const GaitOptimizerOptions& options = {}, int target_steps = 8);
+
 }  // namespace kneed_walker

@@ -24,4 +24,10 @@ void drawGround(cv::Mat& image, const SideView& view, const cv::Scalar& colour =
 void drawWalker(cv::Mat& image, const WalkerSimulator& simulator, const WalkerState& state,
                 const SideView& view, double alpha = 1.0);
 
+// Simulates from `start` for `duration` (model time) and draws `snapshots` stick figures at
+// equal intervals, older ones lighter: a stroboscopic strip. Returns the final state.
+WalkerState drawStrip(cv::Mat& image, const WalkerSimulator& simulator,
+                      const WalkerControls& controls, const WalkerState& start, double duration,
+                      int snapshots, const SideView& view);
+
 }  // namespace kneed_walker

@@ -1,0 +1,64 @@
+// The table of optimal gaits over the paper's grid (§3.3): speeds 3–7 km/h, step lengths
+// 0.5–1.0 m, slopes −4.3°…+4.3°, for a reference person; the prior's backbone. The table is
+// computed once by `rosrun kneed_walker optimize_gaits` and shipped in config/, so users never
+// run the optimiser. Gaits are stored in dimensionless units and scale to any person by Froude
+// similarity (speed ∝ √(gL), step length ∝ L).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kneed_walker/core/optimal_gaits.h"
+
+namespace kneed_walker {
+
+struct GaitGrid {
+  double reference_height_m = 1.75;     // the person the physical axes refer to
+  double leg_length_per_height = 0.53;  // L / H of the walker model
+  double gravity = 9.81;                // m/s²
+  std::vector<double> speeds_kmh;       // ascending
+  std::vector<double> step_lengths_m;   // ascending
+  std::vector<double> slopes_rad;       // ascending, positive uphill
+
+  // 9 speeds × 6 step lengths × 5 slopes, as in the paper.
+  static GaitGrid paper();
+
+  int size() const {
+    return static_cast<int>(speeds_kmh.size() * step_lengths_m.size() * slopes_rad.size());
+  }
+  int index(int speed, int step_length, int slope) const {
+    return (speed * static_cast<int>(step_lengths_m.size()) + step_length) *
+               static_cast<int>(slopes_rad.size()) + slope;
+  }
+  // Grid coordinates (speed, step length, slope) of an index.
+  std::array<int, 3> cell(int index) const;
+  double referenceLegLength() const { return leg_length_per_height * reference_height_m; }
+  // The dimensionless target of a grid point, and of any physical (km/h, m, rad) triple.
+  GaitTarget target(int index) const;
+  GaitTarget target(double speed_kmh, double step_length_m, double slope_rad) const;
+};
+
+// A grid point's result: `gait` is meaningful when `solved`; `feasible` when it met the
+// constraints (OptimalGait::feasible()).
+struct GaitTableEntry {
+  bool solved = false;
+  bool feasible = false;
+  OptimalGait gait;
+};
+
+struct GaitTable {
+  GaitGrid grid;
+  std::vector<GaitTableEntry> entries;  // grid.size() of them, in grid.index() order
+};
+
+void saveGaitTable(const std::string& path, const GaitTable& table);
+// Throws std::invalid_argument naming the problem for a missing, malformed or inconsistent file.
+GaitTable loadGaitTable(const std::string& path);
+
+// The gait at any (speed, step length, slope) inside the grid: controls and start state
+// interpolated trilinearly between the eight surrounding feasible gaits (dimensionless). Throws
+// std::out_of_range naming the axis for a target outside the grid, or the missing corner gait.
+OptimalGait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
+                            double slope_rad);
+
+}  // namespace kneed_walker

@@ -1,0 +1,224 @@
+// optimize_gaits: solves the paper's grid of optimal cyclic gaits (§3.3) and writes the gait
+// table that ships in config/, so that users never have to run the optimiser.
+//
+//   rosrun kneed_walker optimize_gaits [--out config/gait_table.yaml] [--resume]
+//                                      [--threads 0] [--retry-failed] [--max-attempts 4]
+//
+// A first gait is found by continuation from McGeer's passive walker at the seed point; every
+// other grid point is then solved warm-started from its already solved neighbours, the points
+// with the most solved neighbours first, on all cores. The table is rewritten after every
+// gait, so an interrupted run continues with --resume.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "kneed_walker/core/gait_table.h"
+
+namespace kw = kneed_walker;
+
+namespace {
+
+// Grid neighbours (Chebyshev distance 1) of a point.
+std::vector<int> neighbours(const kw::GaitGrid& grid, int index) {
+  const auto c = grid.cell(index);
+  const int n[3] = {static_cast<int>(grid.speeds_kmh.size()),
+                    static_cast<int>(grid.step_lengths_m.size()),
+                    static_cast<int>(grid.slopes_rad.size())};
+  std::vector<int> result;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int dl = -1; dl <= 1; ++dl)
+      for (int ds = -1; ds <= 1; ++ds) {
+        const int v = c[0] + dv, l = c[1] + dl, s = c[2] + ds;
+        if ((dv || dl || ds) && v >= 0 && v < n[0] && l >= 0 && l < n[1] && s >= 0 && s < n[2])
+          result.push_back(grid.index(v, l, s));
+      }
+  return result;
+}
+
+double gridDistance(const kw::GaitGrid& grid, int a, int b) {
+  const auto ca = grid.cell(a), cb = grid.cell(b);
+  double d = 0;
+  for (int i = 0; i < 3; ++i) d += (ca[i] - cb[i]) * (ca[i] - cb[i]);
+  return std::sqrt(d);
+}
+
+void writeAtomically(const std::string& path, const kw::GaitTable& table) {
+  const std::string tmp = path + ".tmp.yaml";
+  kw::saveGaitTable(tmp, table);
+  std::filesystem::rename(tmp, path);
+}
+
+std::string clock(double seconds) {
+  const int s = static_cast<int>(seconds);
+  return std::to_string(s / 60) + ":" + (s % 60 < 10 ? "0" : "") + std::to_string(s % 60);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Solves the grid of optimal cyclic gaits and writes the gait table."};
+  std::string out = "gait_table.yaml";
+  bool resume = false, retry_failed = false;
+  int threads = 0, max_attempts = 4;
+  double seed_speed = 4.5, seed_step = 0.7, seed_slope = 0.0;
+  app.add_option("--out", out, "gait table to write (YAML)");
+  app.add_flag("--resume", resume, "continue the table in --out");
+  app.add_flag("--retry-failed", retry_failed, "with --resume: solve failed points again");
+  app.add_option("--threads", threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
+  app.add_option("--max-attempts", max_attempts, "warm starts tried per point")->check(CLI::Range(1, 26));
+  app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h");
+  app.add_option("--seed-step", seed_step, "seed grid point: step length, m");
+  app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad");
+  CLI11_PARSE(app, argc, argv);
+  if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+  const kw::BodyProportions proportions;
+  const kw::GaitOptimizerOptions options;
+  kw::GaitTable table;
+  if (resume && std::filesystem::exists(out)) {
+    table = kw::loadGaitTable(out);
+    if (retry_failed)
+      for (auto& e : table.entries)
+        if (e.solved && !e.feasible) e.solved = false;
+  } else {
+    table.grid = kw::GaitGrid::paper();
+    table.entries.resize(table.grid.size());
+  }
+  const kw::GaitGrid& grid = table.grid;
+  const auto start_time = std::chrono::steady_clock::now();
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  };
+
+  // The seed: the grid point nearest the requested one.
+  int seed = 0;
+  {
+    double best = 1e300;
+    for (int i = 0; i < grid.size(); ++i) {
+      const auto c = grid.cell(i);
+      const double d = std::pow(grid.speeds_kmh[c[0]] - seed_speed, 2) +
+                       std::pow(grid.step_lengths_m[c[1]] - seed_step, 2) +
+                       std::pow(grid.slopes_rad[c[2]] - seed_slope, 2);
+      if (d < best) best = d, seed = i;
+    }
+  }
+  const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
+                                        [](const kw::GaitTableEntry& e) { return e.feasible; });
+  if (!any_feasible) {
+    std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
+    const kw::OptimalGait gait = kw::seedGait(proportions, grid.target(seed), options);
+    table.entries[seed] = {true, gait.feasible(), gait};
+    writeAtomically(out, table);
+    if (!gait.feasible()) {
+      std::fprintf(stderr, "optimize_gaits: the seed gait did not converge (residual %g)\n",
+                   gait.periodicity_residual);
+      return 1;
+    }
+  }
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::vector<bool> in_progress(grid.size(), false);
+  int running = 0;
+  const bool tty = isatty(STDERR_FILENO);
+  auto progress = [&] {
+    int solved = 0, feasible = 0;
+    for (const auto& e : table.entries) solved += e.solved, feasible += e.feasible;
+    const int width = 30, filled = width * solved / grid.size();
+    const double rate = elapsed() / std::max(1, solved);
+    std::fprintf(stderr, "%s[%s%s] %d/%d solved, %d feasible | %s elapsed, ~%s left%s",
+                 tty ? "\r" : "", std::string(filled, '#').c_str(),
+                 std::string(width - filled, '-').c_str(), solved, grid.size(), feasible,
+                 clock(elapsed()).c_str(), clock(rate * (grid.size() - solved)).c_str(),
+                 tty ? "" : "\n");
+  };
+
+  // The next point to solve: unsolved, not in progress, with the most feasible neighbours
+  // (nearest the seed on ties); -1 if none is ready.
+  auto nextPoint = [&]() {
+    int best = -1, best_count = 0;
+    double best_distance = 0;
+    for (int i = 0; i < grid.size(); ++i) {
+      if (table.entries[i].solved || in_progress[i]) continue;
+      int count = 0;
+      for (int n : neighbours(grid, i)) count += table.entries[n].feasible;
+      const double distance = gridDistance(grid, i, seed);
+      if (count > best_count || (count == best_count && count > 0 && distance < best_distance))
+        best = i, best_count = count, best_distance = distance;
+    }
+    return best;
+  };
+
+  auto worker = [&] {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (true) {
+      const int point = nextPoint();
+      if (point < 0) {
+        if (running == 0) {
+          changed.notify_all();
+          return;
+        }
+        changed.wait(lock);
+        continue;
+      }
+      in_progress[point] = true;
+      ++running;
+      std::vector<int> starts;
+      for (int n : neighbours(grid, point))
+        if (table.entries[n].feasible) starts.push_back(n);
+      std::sort(starts.begin(), starts.end(), [&](int a, int b) {
+        return gridDistance(grid, a, point) < gridDistance(grid, b, point);
+      });
+      std::vector<kw::OptimalGait> warm;
+      for (int n : starts) warm.push_back(table.entries[n].gait);
+      lock.unlock();
+
+      // Warm starts from the nearest solved neighbours; the least effort among feasible ones.
+      const kw::GaitTarget target = grid.target(point);
+      kw::OptimalGait best;
+      bool found = false;
+      int evaluations = 0;
+      for (size_t a = 0; a < warm.size() && static_cast<int>(a) < max_attempts; ++a) {
+        const kw::OptimalGait gait = kw::optimizeGait(proportions, target, warm[a], options);
+        evaluations += gait.evaluations;
+        if (gait.feasible() && (!found || gait.effort < best.effort)) {
+          best = gait;
+          found = true;
+        } else if (!found && a == 0) {
+          best = gait;
+        }
+        if (found) break;
+      }
+      best.evaluations = evaluations;
+
+      lock.lock();
+      table.entries[point] = {true, found, best};
+      in_progress[point] = false;
+      --running;
+      writeAtomically(out, table);
+      progress();
+      changed.notify_all();
+    }
+  };
+
+  progress();
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  int feasible = 0, unreached = 0;
+  for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;
+  std::fprintf(stderr, "%soptimize_gaits: %d of %d gaits feasible, %d unreached, in %s on %d threads; wrote %s\n",
+               tty ? "\n" : "", feasible, grid.size(), unreached, clock(elapsed()).c_str(),
+               threads, out.c_str());
+  return 0;
+}

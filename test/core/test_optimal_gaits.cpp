@@ -1,0 +1,42 @@
+#include "kneed_walker/core/optimal_gaits.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace kneed_walker {
+namespace {
+
+TEST(OptimalGaits, EffortIsEquationNine) {
+  StrideResult stride;
+  stride.duration = 2.0;
+  stride.integrals.squared = {0.4, 0.2, 0.6, 1.0, 5.0};  // the ankle term is not in eq. 9
+  const EffortWeights w;
+  const double expected = 0.62 * std::pow(0.01, 1.5) +
+                          (0.3 * 0.4 + 0.007 * 0.2 + 0.007 * 0.6 + 0.034 * 1.0) / 2.0;
+  EXPECT_NEAR(gaitEffort(stride, 0.01, w), expected, 1e-15);
+}
+
+// From McGeer's passive gait to level walking at 0.40 √(gL) with 0.75 L steps (4.3 km/h and
+// 0.70 m for a 1.75 m person): a feasible optimal gait whose stride really repeats.
+TEST(OptimalGaits, SeedsALevelGaitByContinuation) {
+  const GaitTarget level{0.40, 0.75, 0.0};
+  const OptimalGait gait = seedGait(BodyProportions{}, level, GaitOptimizerOptions{});
+  ASSERT_TRUE(gait.feasible()) << "residual " << gait.periodicity_residual << ", speed error "
+                               << gait.speed_error << ", step error " << gait.step_length_error;
+  const WalkerSimulator sim(dimensionlessWalker(BodyProportions{}));
+  const StrideResult again = sim.stride(gait.controls, gait.start);
+  ASSERT_TRUE(again.completed);
+  EXPECT_LT((again.end.q - gait.start.q).lpNorm<Eigen::Infinity>(), 1e-6);
+  EXPECT_LT((again.end.qdot - gait.start.qdot).lpNorm<Eigen::Infinity>(), 1e-6);
+  EXPECT_NEAR(again.speed, level.speed, 0.01 * level.speed);
+  EXPECT_NEAR(again.step_length, level.step_length, 0.01 * level.step_length);
+  EXPECT_NEAR(gaitEffort(again, gait.controls.toe_off_impulse, EffortWeights{}), gait.effort,
+              1e-9);
+  std::cout << "level gait: effort " << gait.effort << ", period " << again.duration
+            << ", toe-off impulse " << gait.controls.toe_off_impulse << ", torso stiffness "
+            << gait.controls.springs.torso_stiffness << "\n";
+}
+
+}  // namespace
+}  // namespace kneed_walker
