@@ -1,0 +1,120 @@
+#include "kneed_walker/core/camera.h"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace kneed_walker {
+namespace {
+
+constexpr double kMinimumDepthM = 0.01;
+
+Eigen::MatrixXd readMatrix(const cv::FileStorage& file, const std::string& key,
+                           const std::string& path, int rows, int cols) {
+  cv::Mat m;
+  file[key] >> m;
+  if (m.empty()) throw std::invalid_argument(path + ": " + key + " is missing");
+  if (rows > 0 && (m.rows != rows || m.cols != cols))
+    throw std::invalid_argument(path + ": " + key + " must be " + std::to_string(rows) + "x" +
+                                std::to_string(cols) + ", is " + std::to_string(m.rows) + "x" +
+                                std::to_string(m.cols));
+  m.convertTo(m, CV_64F);
+  Eigen::MatrixXd e;
+  cv::cv2eigen(m, e);
+  return e;
+}
+
+}  // namespace
+
+Camera::Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& distortion,
+               const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation_m,
+               int width_px, int height_px)
+    : k_(intrinsics),
+      distortion_(distortion),
+      rotation_(rotation),
+      translation_(translation_m),
+      width_(width_px),
+      height_(height_px) {
+  if (!(k_.allFinite() && k_(0, 0) > 0 && k_(1, 1) > 0 && k_(2, 2) == 1 && k_(0, 1) == 0 &&
+        k_(1, 0) == 0 && k_(2, 0) == 0 && k_(2, 1) == 0))
+    throw std::invalid_argument(
+        "camera intrinsics must be [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0 (OpenCV's model has "
+        "no skew)");
+  const size_t n = distortion.size();
+  if (n != 0 && n != 4 && n != 5 && n != 8)
+    throw std::invalid_argument("camera distortion needs 0, 4, 5 or 8 coefficients (OpenCV order), got " +
+                                std::to_string(n));
+  for (double d : distortion)
+    if (!std::isfinite(d)) throw std::invalid_argument("camera distortion coefficients must be finite");
+  const double* d = distortion.data();
+  if (n >= 4) k1_ = d[0], k2_ = d[1], p1_ = d[2], p2_ = d[3];
+  if (n >= 5) k3_ = d[4];
+  if (n == 8) k4_ = d[5], k5_ = d[6], k6_ = d[7];
+  if (!rotation.allFinite() ||
+      (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      rotation.determinant() < 0)
+    throw std::invalid_argument("camera rotation R must be a rotation matrix (RᵀR = I, det R = 1)");
+  if (!translation_m.allFinite()) throw std::invalid_argument("camera translation must be finite");
+  if (width_px <= 0 || height_px <= 0)
+    throw std::invalid_argument("camera image size must be positive");
+}
+
+Camera Camera::load(const std::string& path, double file_length_unit_m) {
+  if (!(file_length_unit_m > 0)) throw std::invalid_argument("file_length_unit_m must be > 0");
+  cv::FileStorage file;
+  try {
+    file.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw std::invalid_argument(path + ": not a readable calibration: " + e.what());
+  }
+  if (!file.isOpened()) throw std::invalid_argument(path + ": cannot open the calibration");
+  const Eigen::Matrix3d k = readMatrix(file, "camera_matrix", path, 3, 3);
+  const Eigen::MatrixXd d = readMatrix(file, "distortion_coefficients", path, 0, 0);
+  const Eigen::Matrix3d r = readMatrix(file, "R", path, 3, 3);
+  const Eigen::MatrixXd t = readMatrix(file, "t", path, 0, 0);
+  if (t.size() != 3) throw std::invalid_argument(path + ": t must hold 3 values");
+  int width = 0, height = 0;
+  file["image_width"] >> width;
+  file["image_height"] >> height;
+  std::vector<double> distortion(d.data(), d.data() + d.size());
+  const Eigen::Vector3d translation = Eigen::Map<const Eigen::Vector3d>(t.data()) * file_length_unit_m;
+  try {
+    return Camera(k, distortion, r, translation, width, height);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+}
+
+std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& world_m) const {
+  const Eigen::Vector3d c = rotation_ * world_m + translation_;
+  if (c.z() <= kMinimumDepthM) return std::nullopt;
+  // OpenCV's distortion model (cv::projectPoints without thin prism or tilt).
+  const double x = c.x() / c.z(), y = c.y() / c.z();
+  const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+  const double radial = (1 + k1_ * r2 + k2_ * r4 + k3_ * r6) / (1 + k4_ * r2 + k5_ * r4 + k6_ * r6);
+  const double xd = x * radial + 2 * p1_ * x * y + p2_ * (r2 + 2 * x * x);
+  const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
+  return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
+}
+
+std::optional<Eigen::Vector3d> Camera::groundPoint(const Eigen::Vector2d& pixel,
+                                                   double ground_height_m) const {
+  cv::Mat k, d;
+  cv::eigen2cv(k_, k);
+  std::vector<cv::Point2d> in{{pixel.x(), pixel.y()}}, out;
+  cv::undistortPoints(in, out, k, distortion_.empty() ? cv::Mat() : cv::Mat(distortion_),
+                      cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-14));
+  const Eigen::Vector3d ray = rotation_.transpose() * Eigen::Vector3d(out[0].x, out[0].y, 1.0);
+  const Eigen::Vector3d origin = centre();
+  if (std::abs(ray.z()) < 1e-12) return std::nullopt;
+  const double s = (ground_height_m - origin.z()) / ray.z();
+  if (s <= 0) return std::nullopt;
+  return origin + s * ray;
+}
+
+}  // namespace kneed_walker
