@@ -1,0 +1,67 @@
+// The 3D kinematic body model conditioned on the planar walker (paper §3.4): the walker fixes
+// the sagittal motion (hip and knee flexion, torso pitch, progression along the ground); the
+// other degrees of freedom (heading, position, sideways sway, hip abduction and rotation) come
+// from BodyPlacement, which the prior drives as damped 2nd-order Markov processes. Joints are
+// named as in REP 155. The walker's rolling foot is rigid with its shank, so the ankle hinge
+// adds no joint position here; it belongs to the body shapes of the likelihood.
+//
+// World frame: metres, Z up (REP 103), as the camera's. The walker's slope frame (x along the
+// ground in the walking direction, y along the ground normal) is placed at `ground_origin` and
+// turned to `heading`; the ground rises by the slope along the heading.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+
+#include "kneed_walker/core/walker_simulation.h"
+
+namespace kneed_walker {
+
+// REP 155 joint names (without the body id suffix).
+enum BodyJoint : int {
+  kWaist = 0,  // mid-hip: the body root
+  kNeck,
+  kHead,
+  kLeftHip,
+  kRightHip,
+  kLeftKnee,
+  kRightKnee,
+  kLeftAnkle,
+  kRightAnkle,
+  kNumBodyJoints
+};
+const char* jointName(BodyJoint joint);  // "waist", "neck", "head", "l_hip", ...
+
+// Body dimensions that the planar walker does not have, from a person's height (Drillis &
+// Contini's proportions, in Winter's Biomechanics and Motor Control of Human Movement).
+struct BodyShape {
+  double hip_width_m = 0;     // between the hip joints
+  double ankle_height_m = 0;  // ankle above the sole
+  double neck_length_m = 0;   // shoulder line to the head's centre
+  static BodyShape forHeight(double height_m);
+};
+
+// The kinematic degrees of freedom beyond the walker's. Per-leg arrays are [left, right].
+struct BodyPlacement {
+  Eigen::Vector2d ground_origin_m = Eigen::Vector2d::Zero();  // world (X, Y) of the slope-frame origin
+  double heading_rad = 0;      // walking direction in the world XY plane, from +X towards +Y
+  double sway_m = 0;           // sideways offset of the whole body (to its left)
+  std::array<double, 2> hip_abduction_rad{};  // leg turned outwards about the forward axis
+  std::array<double, 2> hip_rotation_rad{};   // about the thigh (turns the bent knee's shank)
+};
+
+struct BodyPose {
+  std::array<Eigen::Vector3d, kNumBodyJoints> joints;  // world, metres
+  std::array<Eigen::Vector3d, 2> foot_centres;         // centres of the rolling feet [left, right]
+  Eigen::Vector3d forward;  // unit walking direction along the ground
+  Eigen::Vector3d up;       // unit ground normal
+  Eigen::Vector3d left;     // unit lateral direction, up × forward
+};
+
+// The 3D pose of a walker state. `ground_slope` is the walker's γ (positive uphill).
+BodyPose bodyPose(const WalkerSimulator& simulator, const WalkerState& state,
+                  double ground_slope, const BodyPlacement& placement, const BodyShape& shape);
+
+}  // namespace kneed_walker

@@ -1,0 +1,88 @@
+#include "kneed_walker/core/body_model.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+namespace kneed_walker {
+namespace {
+
+constexpr int kLeft = 0, kRight = 1;
+
+}  // namespace
+
+const char* jointName(BodyJoint joint) {
+  static const char* const kNames[kNumBodyJoints] = {
+      "waist", "neck", "head", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle"};
+  return kNames[joint];
+}
+
+BodyShape BodyShape::forHeight(double height_m) {
+  BodyShape shape;
+  shape.hip_width_m = 0.100 * height_m;    // hip joint centres (inferred; hip breadth is 0.191 H)
+  shape.ankle_height_m = 0.039 * height_m;  // Drillis & Contini
+  shape.neck_length_m = 0.110 * height_m;   // shoulder line (0.818 H) to the head's centre
+  return shape;
+}
+
+BodyPose bodyPose(const WalkerSimulator& sim, const WalkerState& state, double ground_slope,
+                  const BodyPlacement& placement, const BodyShape& shape) {
+  const KinematicMap& map = sim.map();
+  const WalkerModel& model = sim.model();
+  BodyPose pose;
+  // The slope frame in the world: forward along the ground, up along its normal.
+  const double c = std::cos(placement.heading_rad), s = std::sin(placement.heading_rad);
+  const Eigen::Vector3d heading(c, s, 0), vertical(0, 0, 1);
+  pose.forward = std::cos(ground_slope) * heading + std::sin(ground_slope) * vertical;
+  pose.up = -std::sin(ground_slope) * heading + std::cos(ground_slope) * vertical;
+  pose.left = Eigen::Vector3d(-s, c, 0);
+  const Eigen::Vector3d origin = Eigen::Vector3d(placement.ground_origin_m.x(),
+                                                 placement.ground_origin_m.y(), 0) +
+                                 placement.sway_m * pose.left;
+  auto vector = [&](Point p) { return Eigen::Vector3d(p.real() * pose.forward + p.imag() * pose.up); };
+  auto world = [&](Point p, double lateral) {
+    return Eigen::Vector3d(origin + vector(p) + lateral * pose.left);
+  };
+
+  const auto e = phasors(state.q);
+  const Point base = stanceFootCentre(map, state.q, state.stance_foot_x);
+  auto at = [&](const PointMap& p) { return base + relativePosition(p, e); };
+  const Point hip = at(map.hip), shoulder = at(map.shoulder);
+  const Point down_torso(std::sin(state.q[kTorso]), -std::cos(state.q[kTorso]));  // d(φTo)
+
+  pose.joints[kWaist] = world(hip, 0);
+  pose.joints[kNeck] = world(shoulder, 0);
+  pose.joints[kHead] = world(shoulder - shape.neck_length_m * down_torso, 0);
+
+  // Legs: the stance leg is the walker's stance leg; each hangs from its hip joint.
+  const int stance = state.stance_leg == Leg::kLeft ? kLeft : kRight;
+  const double ankle_from_knee = model.shank.length - shape.ankle_height_m;
+  for (int side : {kLeft, kRight}) {
+    const bool is_stance = side == stance;
+    const Point knee = at(is_stance ? map.stance_knee : map.swing_knee);
+    const Point foot = is_stance ? base : at(map.swing_foot_centre);
+    const double shank_angle = state.q[is_stance ? kStanceShank : kSwingShank];
+    const Point ankle = knee + ankle_from_knee * Point(std::sin(shank_angle), -std::cos(shank_angle));
+    const double outward = side == kLeft ? 1.0 : -1.0;
+    const Eigen::Vector3d hip_joint = world(hip, 0.5 * outward * shape.hip_width_m);
+    Eigen::Vector3d thigh = vector(knee - hip), shank = vector(ankle - knee),
+                    to_foot = vector(foot - knee);
+    // Hip rotation turns the shank about the thigh; abduction turns the leg outwards about the
+    // forward axis.
+    const Eigen::AngleAxisd rotation(outward * placement.hip_rotation_rad[side], thigh.normalized());
+    shank = rotation * shank;
+    to_foot = rotation * to_foot;
+    const Eigen::AngleAxisd abduction(outward * placement.hip_abduction_rad[side], pose.forward);
+    thigh = abduction * thigh;
+    shank = abduction * shank;
+    to_foot = abduction * to_foot;
+    const int hip_joint_index = side == kLeft ? kLeftHip : kRightHip;
+    pose.joints[hip_joint_index] = hip_joint;
+    pose.joints[hip_joint_index + 2] = hip_joint + thigh;          // knee
+    pose.joints[hip_joint_index + 4] = hip_joint + thigh + shank;  // ankle
+    pose.foot_centres[side] = hip_joint + thigh + to_foot;
+  }
+  return pose;
+}
+
+}  // namespace kneed_walker
