@@ -5,8 +5,9 @@
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
 //
 // A first gait is found by continuation from McGeer's passive walker at the seed point; every
-// other grid point is then solved warm-started from its already solved neighbours, the points
-// with the most solved neighbours first, on all cores. The table is rewritten after every
+// other grid point is then solved warm-started from its already solved neighbours (the points
+// with the most solved neighbours first, on all cores), and where those fail, by continuation
+// from the nearest neighbour through the midpoint. The table is rewritten after every
 // gait, so an interrupted run continues with --resume.
 #include <unistd.h>
 
@@ -197,6 +198,23 @@ int main(int argc, char** argv) {
           best = gait;
         }
         if (found) break;
+      }
+      // Failing that, continue from the nearest neighbour through the midpoint target.
+      if (!found && !warm.empty()) {
+        const kw::GaitTarget& from = warm.front().target;
+        const kw::GaitTarget middle{0.5 * (from.speed + target.speed),
+                                    0.5 * (from.step_length + target.step_length),
+                                    0.5 * (from.slope + target.slope)};
+        const kw::OptimalGait half = kw::optimizeGait(proportions, middle, warm.front(), options);
+        evaluations += half.evaluations;
+        if (half.feasible()) {
+          const kw::OptimalGait gait = kw::optimizeGait(proportions, target, half, options);
+          evaluations += gait.evaluations;
+          if (gait.feasible()) {
+            best = gait;
+            found = true;
+          }
+        }
       }
       best.evaluations = evaluations;
 

@@ -13,7 +13,7 @@ TEST(OptimalGaits, EffortIsEquationNine) {
   stride.integrals.squared = {0.4, 0.2, 0.6, 1.0, 5.0};  // the ankle term is not in eq. 9
   const EffortWeights w;
   const double expected = 0.62 * std::pow(0.01, 1.5) +
-                          (0.3 * 0.4 + 0.007 * 0.2 + 0.007 * 0.6 + 0.034 * 1.0) / 2.0;
+                          132.3 * (0.3 * 0.4 + 0.007 * 0.2 + 0.007 * 0.6 + 0.034 * 1.0) / 2.0;
   EXPECT_NEAR(gaitEffort(stride, 0.01, w), expected, 1e-15);
 }
 

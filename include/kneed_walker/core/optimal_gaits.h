@@ -23,6 +23,15 @@ struct GaitTarget {
 };
 
 // The paper's weights of eq. 9.
+//
+// The paper does not say in which units eq. 9 is evaluated, and the units matter: torques and
+// the impulse scale differently (τ by M g L, ι by M √(gL), and ι enters as ι^1.5). Read in SI
+// units for the reference person (70 kg, L = 0.9275 m), the torque terms weigh
+// (M g L)² / (M √(gL))^1.5 = 132.3 times more against the impulse than read in dimensionless
+// units. That reading reproduces the paper's findings far better (a passive swing knee on the
+// level, a stiffer stance knee uphill, the torso leaning back downhill; the dimensionless
+// reading stiffens the swing knee and props the torso forward), so the torque terms carry
+// torque_unit_scale.
 struct EffortWeights {
   double impulse = 0.62;         // β_ι
   double impulse_exponent = 1.5;  // α
@@ -30,6 +39,7 @@ struct EffortWeights {
   double swing_knee = 0.007;     // β_K2
   double hip = 0.007;            // β_H
   double torso = 0.034;          // β_To
+  double torque_unit_scale = 132.3;  // weight of the torque terms against the impulse term
 };
 
 // Effort E of eq. 9 for a simulated stride and its impulse.
