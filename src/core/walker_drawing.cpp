@@ -54,12 +54,20 @@ void drawWalker(cv::Mat& image, const WalkerSimulator& sim, const WalkerState& s
     cv::ellipse(image, view.toImage(centre), cv::Size2d(foot_radius_px, foot_radius_px), degrees,
                 50, 130, faded(colour, alpha), thickness, cv::LINE_AA);
   };
-  line(hip, at(map.swing_knee), swing_colour);
-  line(at(map.swing_knee), view.toImage(swing_foot), swing_colour);
-  foot(swing_foot, state.q[kSwingShank], swing_colour);
-  line(hip, at(map.stance_knee), stance_colour);
-  line(at(map.stance_knee), view.toImage(stance_foot), stance_colour);
-  foot(stance_foot, state.q[kStanceShank], stance_colour);
+  // Each shank along its own axis down to the foot's level, then the foot's offset e to the
+  // foot centre (drawn to the foot centre directly, a straight knee would look bent by e).
+  const double shank_to_foot = sim.model().shank.length - map.foot_radius;
+  auto leg = [&](const PointMap& knee_map, Point foot_centre, double shank_angle,
+                 const cv::Scalar& colour) {
+    const Point knee = sim.pointPosition(knee_map, state);
+    const Point shank_end = knee + shank_to_foot * Point(std::sin(shank_angle), -std::cos(shank_angle));
+    line(hip, view.toImage(knee), colour);
+    line(view.toImage(knee), view.toImage(shank_end), colour);
+    line(view.toImage(shank_end), view.toImage(foot_centre), colour);
+    foot(foot_centre, shank_angle, colour);
+  };
+  leg(map.swing_knee, swing_foot, state.q[kSwingShank], swing_colour);
+  leg(map.stance_knee, stance_foot, state.q[kStanceShank], stance_colour);
   line(hip, shoulder, kTrunkColour);
   const double head_radius = 0.12 * sim.model().legLength() * view.pixels_per_unit;
   const cv::Point2d neck_to_head = (shoulder - hip) * (head_radius / cv::norm(shoulder - hip));
