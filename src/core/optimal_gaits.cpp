@@ -201,7 +201,8 @@ double gaitEffort(const StrideResult& stride, double toe_off_impulse, const Effo
   const double torques = w.stance_knee * sq[kStanceKnee] + w.swing_knee * sq[kSwingKnee] +
                          w.hip * sq[kHip] + w.torso * sq[kTorsoJoint];
   return w.impulse * std::pow(toe_off_impulse, w.impulse_exponent) +
-         w.torque_unit_scale * torques / std::max(stride.duration, 1e-9);
+         (w.torque_unit_scale * torques + w.scuff * stride.integrals.scuff) /
+             std::max(stride.duration, 1e-9);
 }
 
 namespace {

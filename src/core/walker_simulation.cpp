@@ -198,6 +198,15 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
     return 1.0;
   };
 
+  // The scuff integrand at a pose (see TorqueIntegrals::scuff).
+  const double window = options_.passing_window * model_.legLength();
+  const double margin = options_.clearance_margin * model_.legLength();
+  auto scuffing = [&](const Geometry& g) {
+    if (std::abs(g.swing_foot_ahead) >= window) return 0.0;
+    const double below = margin - g.swing_clearance;
+    return below > 0 ? below * below : 0.0;
+  };
+
   Geometry at_state = geometry(state.q);
   WalkerState trial;
   while (report.elapsed < duration) {
@@ -214,13 +223,14 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
     const bool any_event = triggered[0] || triggered[1] || triggered[2];
 
     if (!any_event) {
-      state = trial;
-      at_state = at_trial;
-      report.elapsed += h;
       if (integrals) {
         for (int j = 0; j < kNumJoints; ++j) integrals->squared[j] += step_integrals.squared[j];
         integrals->work += step_integrals.work;
+        integrals->scuff += h * 0.5 * (scuffing(at_state) + scuffing(at_trial));  // trapezoid
       }
+      state = trial;
+      at_state = at_trial;
+      report.elapsed += h;
     } else {
       // Localise the earliest event by the Illinois method on the step fraction.
       Event first = Event::kNone;

@@ -63,6 +63,29 @@ TEST(WalkerSimulation, PassiveStridesOnlyLoseEnergyAtEvents) {
   }
 }
 
+// The scuff integral counts a swing foot passing the stance foot lower than the margin: McGeer's
+// passive gait swings its foot within a few millimetres of the ground.
+TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  WalkerState s;
+  s.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
+  s.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
+  s.knee_on_limit = {true, false};
+  double previous = 0;
+  for (double margin : {-1.0, 0.0, 0.01, 0.05}) {
+    SimulationOptions options;
+    options.clearance_margin = margin;
+    const WalkerSimulator sim(mcGeerPassiveWalker(), options);
+    const StrideResult stride = sim.stride(passive, s);
+    ASSERT_TRUE(stride.completed);
+    if (margin < 0) EXPECT_EQ(stride.integrals.scuff, 0.0);
+    if (margin >= 0.01) EXPECT_GT(stride.integrals.scuff, previous) << "a higher margin costs more";
+    previous = stride.integrals.scuff;
+    std::cout << "margin " << margin << " L: scuff integral " << stride.integrals.scuff << "\n";
+  }
+}
+
 TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
   const WalkerSimulator sim(kPerson);
   std::mt19937 rng(11);

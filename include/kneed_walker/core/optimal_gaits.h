@@ -40,6 +40,10 @@ struct EffortWeights {
   double hip = 0.007;            // β_H
   double torso = 0.034;          // β_To
   double torque_unit_scale = 132.3;  // weight of the torque terms against the impulse term
+  // Penalty on a swing foot passing lower than SimulationOptions::clearance_margin (per unit
+  // of TorqueIntegrals::scuff / T): not in the paper, whose walker presumably cleared the
+  // ground; without it the cheapest swing is a straight leg through the ground.
+  double scuff = 1e5;
 };
 
 // Effort E of eq. 9 for a simulated stride and its impulse.

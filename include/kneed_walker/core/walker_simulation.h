@@ -36,6 +36,10 @@ WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
 struct TorqueIntegrals {
   JointTorques squared{};  // ∫ τ_j² dt per joint (stance knee, swing knee, hip, torso, ankle)
   double work = 0;         // ∫ Q_applied · q̇ dt: work of all applied joint torques
+  // ∫ max(0, clearance_margin − h)² dt while the swing foot passes the stance foot, h the
+  // swing sole's height: how far the swing foot scuffs (the dynamics ignore scuffing, as in
+  // McGeer's walkers; the gait optimisation must not).
+  double scuff = 0;
 };
 
 // Step and event settings, in units of the model's natural time √(L/g) (0.31 s for a
@@ -46,6 +50,8 @@ struct SimulationOptions {
   double max_stride_duration = 6.0;   // a longer stride counts as a fall, natural time units
   double min_hip_height = 0.5;        // a hip lower than this × leg length is a fall
   double knee_sticking_rate = 1e-3;   // a knee leaving its limit slower stays on it, rad per natural time
+  double passing_window = 0.15;       // the swing foot passes the stance foot within ± this × leg length
+  double clearance_margin = 0.01;     // swing-sole height below which passing counts as scuffing, × leg length
 };
 
 struct AdvanceReport {
