@@ -1,5 +1,7 @@
 #include "kneed_walker/core/optimal_gaits.h"
 
+#include "kneed_walker/core/gait_table.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,10 +19,10 @@ TEST(OptimalGaits, EffortIsEquationNine) {
   EXPECT_NEAR(gaitEffort(stride, 0.01, w), expected, 1e-15);
 }
 
-// From McGeer's passive gait to level walking at 0.40 √(gL) with 0.75 L steps (4.3 km/h and
-// 0.70 m for a 1.75 m person): a feasible optimal gait whose stride really repeats.
+// From McGeer's passive gait to the gait table's seed, level walking at 4.5 km/h with 0.70 m
+// steps for the 1.75 m reference person: a feasible optimal gait whose stride really repeats.
 TEST(OptimalGaits, SeedsALevelGaitByContinuation) {
-  const GaitTarget level{0.40, 0.75, 0.0};
+  const GaitTarget level = GaitGrid::paper().target(4.5, 0.7, 0.0);
   const OptimalGait gait = seedGait(BodyProportions{}, level, GaitOptimizerOptions{});
   ASSERT_TRUE(gait.feasible()) << "residual " << gait.periodicity_residual << ", speed error "
                                << gait.speed_error << ", step error " << gait.step_length_error;
