@@ -8,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "read_file_storage.h"
+
 namespace kneed_walker {
 namespace {
 
@@ -65,13 +67,7 @@ Camera::Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& dis
 
 Camera Camera::load(const std::string& path, double file_length_unit_m) {
   if (!(file_length_unit_m > 0)) throw std::invalid_argument("file_length_unit_m must be > 0");
-  cv::FileStorage file;
-  try {
-    file.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::invalid_argument(path + ": not a readable calibration: " + e.what());
-  }
-  if (!file.isOpened()) throw std::invalid_argument(path + ": cannot open the calibration");
+  cv::FileStorage file = readFileStorage(path, "calibration");
   const Eigen::Matrix3d k = readMatrix(file, "camera_matrix", path, 3, 3);
   const Eigen::MatrixXd d = readMatrix(file, "distortion_coefficients", path, 0, 0);
   const Eigen::Matrix3d r = readMatrix(file, "R", path, 3, 3);

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "read_file_storage.h"
+
 namespace kneed_walker {
 namespace {
 
@@ -144,13 +146,7 @@ void saveGaitTable(const std::string& path, const GaitTable& table) {
 }
 
 GaitTable loadGaitTable(const std::string& path) {
-  cv::FileStorage file;
-  try {
-    file.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::invalid_argument(path + ": not a readable gait table: " + e.what());
-  }
-  if (!file.isOpened()) throw std::invalid_argument(path + ": cannot open the gait table");
+  cv::FileStorage file = readFileStorage(path, "gait table");
   GaitTable table;
   GaitGrid& g = table.grid;
   file["reference_height_m"] >> g.reference_height_m;

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "read_file_storage.h"
+
 namespace kneed_walker {
 namespace {
 
@@ -74,13 +76,7 @@ std::vector<std::string> validate(const BodyProportions& p) {
 }
 
 BodyProportions loadBodyProportions(const std::string& path) {
-  cv::FileStorage file;
-  try {
-    file.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::invalid_argument(path + ": not readable as YAML: " + e.what());
-  }
-  if (!file.isOpened()) throw std::invalid_argument(path + ": cannot open");
+  cv::FileStorage file = readFileStorage(path, "body-proportion file");
 
   BodyProportions p;
   std::vector<std::string> problems;
