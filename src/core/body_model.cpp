@@ -17,11 +17,27 @@ const char* jointName(BodyJoint joint) {
   return kNames[joint];
 }
 
-BodyShape BodyShape::forHeight(double height_m) {
+const char* partName(BodyPart part) {
+  static const char* const kNames[kNumBodyParts] = {"torso",   "head",    "l_thigh", "r_thigh",
+                                                    "l_shank", "r_shank", "l_foot",  "r_foot"};
+  return kNames[part];
+}
+
+BodyShape BodyShape::forHeight(double h) {
   BodyShape shape;
-  shape.hip_width_m = 0.100 * height_m;    // hip joint centres (inferred; hip breadth is 0.191 H)
-  shape.ankle_height_m = 0.039 * height_m;  // Drillis & Contini
-  shape.neck_length_m = 0.110 * height_m;   // shoulder line (0.818 H) to the head's centre
+  shape.hip_width_m = 0.100 * h;     // hip joint centres (inferred; hip breadth is 0.191 H)
+  shape.ankle_height_m = 0.039 * h;  // Drillis & Contini
+  shape.neck_length_m = 0.110 * h;   // shoulder line (0.818 H) to the head's centre
+  shape.foot_length_m = 0.152 * h;   // Drillis & Contini
+  // {proximal width, depth, distal width, depth} as fractions of height.
+  auto part = [h](double pw, double pd, double dw, double dd) {
+    return PartShape{pw * h, pd * h, dw * h, dd * h};
+  };
+  shape.parts[kTorsoPart] = part(0.19, 0.12, 0.21, 0.13);  // hips to shoulder line
+  shape.parts[kHeadPart] = part(0.09, 0.11, 0.09, 0.11);
+  shape.parts[kLeftThighPart] = shape.parts[kRightThighPart] = part(0.09, 0.10, 0.06, 0.06);
+  shape.parts[kLeftShankPart] = shape.parts[kRightShankPart] = part(0.06, 0.065, 0.04, 0.04);
+  shape.parts[kLeftFootPart] = shape.parts[kRightFootPart] = part(0.05, 0.05, 0.055, 0.025);
   return shape;
 }
 

@@ -34,12 +34,36 @@ enum BodyJoint : int {
 };
 const char* jointName(BodyJoint joint);  // "waist", "neck", "head", "l_hip", ...
 
+// The body's volume for the image likelihood: tapered elliptical cylinders, one per part.
+enum BodyPart : int {
+  kTorsoPart = 0,
+  kHeadPart,
+  kLeftThighPart,
+  kRightThighPart,
+  kLeftShankPart,
+  kRightShankPart,
+  kLeftFootPart,
+  kRightFootPart,
+  kNumBodyParts
+};
+const char* partName(BodyPart part);  // "torso", "head", "l_thigh", ...
+
+// A part's cross-sections at its proximal and distal ends: ellipses with one axis across the
+// body (width) and one square to it (depth), tapering linearly between the ends.
+struct PartShape {
+  double proximal_width_m = 0, proximal_depth_m = 0;
+  double distal_width_m = 0, distal_depth_m = 0;
+};
+
 // Body dimensions that the planar walker does not have, from a person's height (Drillis &
-// Contini's proportions, in Winter's Biomechanics and Motor Control of Human Movement).
+// Contini's proportions, in Winter's Biomechanics and Motor Control of Human Movement; part
+// breadths inferred from Winter's anthropometry, as the paper set its sizes by hand).
 struct BodyShape {
   double hip_width_m = 0;     // between the hip joints
   double ankle_height_m = 0;  // ankle above the sole
   double neck_length_m = 0;   // shoulder line to the head's centre
+  double foot_length_m = 0;   // heel to toe
+  std::array<PartShape, kNumBodyParts> parts;
   static BodyShape forHeight(double height_m);
 };
 
