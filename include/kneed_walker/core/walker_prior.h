@@ -1,0 +1,84 @@
+// The stochastic prior over walking (paper §3.4): the transition s_t ~ p(s_t | s_{t−1}) that
+// a particle filter calls once per particle per frame.
+//
+//  * Per stride (from each heel strike): the mean stiffnesses κ̄_j of the stance knee, hip and
+//    torso ~ N(gait value, σ̄_j²); the toe-off impulse for the coming contact ~ Exponential.
+//  * Per frame: κ_j(t) ~ N(κ̄_j, σ_j²); the torque noise of eq. 11, η_j(t) = α_j η_j(t−1) +
+//    s_j ε with ε Cauchy, on the knees, hip, torso and the stance leg against the ground.
+//  * Fixed (paper): knee damping dK1 = dK2 = 0.05, κK2 = 0, torso rest angle φ⁰To = γ/3,
+//    torso damping dTo = 1.5.
+//  * Then the walker is simulated deterministically over the frame.
+//
+// Units: the gait table's dimensionless ones (leg length 1, body mass 1, g = 1; time in
+// √(L/g)), in which the paper gives these values. All randomness comes from the caller's
+// generator: the same seed gives the same particles.
+#pragma once
+
+#include <array>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "kneed_walker/core/optimal_gaits.h"
+
+namespace kneed_walker {
+
+using Random = std::mt19937_64;
+
+// The sampled stiffnesses: stance knee, hip, torso.
+enum PriorStiffness : int { kPriorStanceKnee = 0, kPriorHip, kPriorTorso, kNumPriorStiffnesses };
+
+struct PriorOptions {
+  double knee_damping = 0.05;              // dK1 = dK2
+  double swing_knee_stiffness = 0.0;       // κK2
+  double torso_rest_per_slope = 1.0 / 3;   // φ⁰To = this × γ
+  double torso_damping = 1.5;              // dTo
+  // Per-stride means: N(gait value, stride_sd²); per-frame values: N(mean, frame_sd²).
+  std::array<double, kNumPriorStiffnesses> stride_sd{{0.2, 0.01, 0.3}};
+  std::array<double, kNumPriorStiffnesses> frame_sd{{0.05, 0.002, 0.05}};
+  double impulse_scale = 0.015;            // ι ~ Exponential with this mean
+  // Eq. 11 per joint (stance knee, swing knee, hip, torso, stance ankle).
+  JointTorques noise_decay{{0.9, 0.9, 0.9, 0.9, 0.9}};           // α_j ∈ [0, 1]
+  JointTorques noise_scale{{0.002, 0.001, 0.002, 0.002, 0.001}};  // s_j, torque units M g L
+};
+
+// Every problem with the options, each naming the field.
+std::vector<std::string> validate(const PriorOptions& options);
+
+// One particle's full state s_t = (θ_t, η_t, x_t) (the kinematic DOFs k_t are the body
+// model's placement, driven by the tracker).
+struct WalkerParticle {
+  WalkerState walker;
+  std::array<double, kNumPriorStiffnesses> stride_mean{};  // κ̄_j for the current stride
+  std::array<double, kNumPriorStiffnesses> stiffness{};    // κ_j(t)
+  JointTorques noise{};                                    // η_j(t)
+  double next_impulse = 0;                                 // ι at the coming heel strike
+  std::uint32_t stride_of_means = 0;  // walker.heel_strikes when stride_mean was drawn
+};
+
+class WalkerPrior {
+ public:
+  // `gait` supplies the means of the stride stiffnesses, the slope and the start state.
+  WalkerPrior(const WalkerSimulator& simulator, const OptimalGait& gait, const PriorOptions& options);
+
+  // A particle on the gait's periodic stride at `phase` ∈ [0, 1) of it, with fresh samples.
+  WalkerParticle sample(double phase, Random& random) const;
+
+  // s_t ~ p(s_t | s_{t−1}) over dt (natural time units): samples, then simulates.
+  AdvanceReport transition(WalkerParticle& particle, double dt, Random& random) const;
+
+  // The controls a particle's walker runs with.
+  WalkerControls controls(const WalkerParticle& particle) const;
+
+  const OptimalGait& gait() const { return gait_; }
+
+ private:
+  void newStride(WalkerParticle& particle, Random& random) const;
+
+  const WalkerSimulator& sim_;
+  OptimalGait gait_;
+  PriorOptions options_;
+  std::array<double, kNumPriorStiffnesses> gait_stiffness_;
+};
+
+}  // namespace kneed_walker

@@ -1,0 +1,100 @@
+#include "kneed_walker/core/walker_prior.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "kneed_walker/core/gait_table.h"
+
+namespace kneed_walker {
+namespace {
+
+const std::string kTable = std::string(KNEED_WALKER_SOURCE_DIR) + "/config/gait_table.yaml";
+
+struct Fixture {
+  Fixture() : sim(dimensionlessWalker(BodyProportions{})) {
+    const GaitTable table = loadGaitTable(kTable);
+    gait = interpolateGait(table, 4.5, 0.7, 0.0);
+    gait.stride = sim.stride(gait.controls, gait.start);
+  }
+  WalkerSimulator sim;
+  OptimalGait gait;
+};
+
+TEST(WalkerPrior, SameSeedSameParticles) {
+  const Fixture f;
+  const WalkerPrior prior(f.sim, f.gait, PriorOptions{});
+  auto run = [&](unsigned seed) {
+    Random random(seed);
+    WalkerParticle p = prior.sample(0.3, random);
+    for (int i = 0; i < 60; ++i) prior.transition(p, 0.1, random);
+    return p;
+  };
+  const WalkerParticle a = run(7), b = run(7), c = run(8);
+  EXPECT_EQ(a.walker.q, b.walker.q);
+  EXPECT_EQ(a.noise, b.noise);
+  EXPECT_EQ(a.stiffness, b.stiffness);
+  EXPECT_NE(a.walker.q, c.walker.q) << "another seed, another particle";
+}
+
+TEST(WalkerPrior, ControlsCarryThePapersFixedValues) {
+  const Fixture f;
+  const WalkerPrior prior(f.sim, f.gait, PriorOptions{});
+  Random random(1);
+  const WalkerControls c = prior.controls(prior.sample(0.0, random));
+  EXPECT_DOUBLE_EQ(c.springs.stance_knee_damping, 0.05);
+  EXPECT_DOUBLE_EQ(c.springs.swing_knee_damping, 0.05);
+  EXPECT_DOUBLE_EQ(c.springs.swing_knee_stiffness, 0.0);
+  EXPECT_DOUBLE_EQ(c.springs.torso_damping, 1.5);
+  EXPECT_DOUBLE_EQ(c.springs.torso_rest_angle, f.gait.target.slope / 3);
+}
+
+TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {
+  const Fixture f;
+  PriorOptions options;
+  const WalkerPrior prior(f.sim, f.gait, options);
+  Random random(3);
+  const int n = 20000;
+  double impulse_sum = 0, hip_sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const WalkerParticle p = prior.sample(0.0, random);
+    impulse_sum += p.next_impulse;
+    hip_sum += p.stride_mean[kPriorHip];
+  }
+  // Exponential(mean 0.015): standard error 0.015 / √n ≈ 1e-4.
+  EXPECT_NEAR(impulse_sum / n, options.impulse_scale, 6e-4);
+  EXPECT_NEAR(hip_sum / n, f.gait.controls.springs.hip_stiffness, 6 * options.stride_sd[kPriorHip] / std::sqrt(n) + 1e-3);
+}
+
+// Eq. 11 with α = 0 is white Cauchy noise of scale s: the median of |η| is s.
+TEST(WalkerPrior, TorqueNoiseIsCauchyWithItsScale) {
+  const Fixture f;
+  PriorOptions options;
+  options.noise_decay.fill(0.0);
+  options.noise_scale = {0.01, 0.0, 0.0, 0.0, 0.0};
+  const WalkerPrior prior(f.sim, f.gait, options);
+  Random random(4);
+  WalkerParticle p = prior.sample(0.0, random);
+  std::vector<double> magnitudes;
+  for (int i = 0; i < 4000; ++i) {
+    prior.transition(p, 1e-3, random);
+    magnitudes.push_back(std::abs(p.noise[kStanceKnee]));
+    EXPECT_EQ(p.noise[kHip], 0.0);
+  }
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + 2000, magnitudes.end());
+  EXPECT_NEAR(magnitudes[2000], 0.01, 0.001);
+}
+
+TEST(WalkerPrior, BadOptionsAreRefusedNamingTheField) {
+  PriorOptions options;
+  options.noise_decay[2] = 1.5;
+  options.knee_damping = -1;
+  const auto problems = validate(options);
+  ASSERT_EQ(problems.size(), 2u);
+  EXPECT_NE(problems[0].find("knee_damping"), std::string::npos);
+  EXPECT_NE(problems[1].find("noise_decay[2]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace kneed_walker
