@@ -93,4 +93,27 @@ AdvanceReport WalkerPrior::transition(WalkerParticle& p, double dt, Random& rand
   return sim_.advance(controls(p), p.walker, dt);
 }
 
+void stepPlacement(PlacementState& p, const PlacementNoise& n, double dt, double pivot_along_m,
+                   Random& random) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double root_dt = std::sqrt(dt);
+  auto step = [&](double& value, double& rate, double damping, double sigma, double restoring) {
+    rate = rate * std::exp(-damping * dt) - restoring * value * dt + sigma * root_dt * normal(random);
+    value += rate * dt;
+  };
+  const double old_heading = p.value.heading_rad;
+  step(p.value.heading_rad, p.heading_rate, n.heading_damping, n.heading_sigma, 0.0);
+  step(p.value.sway_m, p.sway_rate, n.sway_damping, n.sway_sigma, n.sway_restoring);
+  for (int side = 0; side < 2; ++side) {
+    step(p.value.hip_abduction_rad[side], p.abduction_rate[side], n.abduction_damping,
+         n.abduction_sigma, 0.0);
+    step(p.value.hip_rotation_rad[side], p.rotation_rate[side], n.rotation_damping,
+         n.rotation_sigma, 0.0);
+  }
+  // Keep the pivot (origin + pivot_along · heading direction) fixed through the turn.
+  const Eigen::Vector2d before(std::cos(old_heading), std::sin(old_heading));
+  const Eigen::Vector2d after(std::cos(p.value.heading_rad), std::sin(p.value.heading_rad));
+  p.value.ground_origin_m += pivot_along_m * (before - after);
+}
+
 }  // namespace kneed_walker

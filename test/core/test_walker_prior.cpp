@@ -86,6 +86,35 @@ TEST(WalkerPrior, TorqueNoiseIsCauchyWithItsScale) {
   EXPECT_NEAR(magnitudes[2000], 0.01, 0.001);
 }
 
+// The placement processes: turning keeps the pivot (the stance foot) in place, the sway stays
+// near zero, and with no noise nothing moves.
+TEST(WalkerPrior, PlacementProcessesTurnAboutTheStanceFoot) {
+  Random random(9);
+  PlacementState state;
+  state.value.ground_origin_m = {1.0, 2.0};
+  const double pivot = 3.0;  // metres along the heading
+  auto pivotPoint = [&] {
+    return Eigen::Vector2d(state.value.ground_origin_m +
+                           pivot * Eigen::Vector2d(std::cos(state.value.heading_rad),
+                                                   std::sin(state.value.heading_rad)));
+  };
+  const Eigen::Vector2d start = pivotPoint();
+  double max_sway = 0;
+  const PlacementNoise noise;
+  for (int i = 0; i < 3000; ++i) {
+    stepPlacement(state, noise, 1.0 / 30, pivot, random);
+    max_sway = std::max(max_sway, std::abs(state.value.sway_m));
+  }
+  EXPECT_NEAR((pivotPoint() - start).norm(), 0.0, 1e-9);
+  EXPECT_GT(std::abs(state.value.heading_rad), 1e-3) << "the heading wanders";
+  EXPECT_LT(max_sway, 0.2) << "the sway is held near the walking line";
+
+  PlacementState still;
+  stepPlacement(still, PlacementNoise{0, 0, 0, 0, 0, 0, 0, 0, 0}, 0.1, pivot, random);
+  EXPECT_EQ(still.value.heading_rad, 0.0);
+  EXPECT_EQ(still.value.ground_origin_m, Eigen::Vector2d::Zero());
+}
+
 TEST(WalkerPrior, BadOptionsAreRefusedNamingTheField) {
   PriorOptions options;
   options.noise_decay[2] = 1.5;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "kneed_walker/core/body_model.h"
 #include "kneed_walker/core/optimal_gaits.h"
 
 namespace kneed_walker {
@@ -44,6 +45,31 @@ struct PriorOptions {
 
 // Every problem with the options, each naming the field.
 std::vector<std::string> validate(const PriorOptions& options);
+
+// The kinematic DOFs that the walker does not fix (paper §3.4: "damped 2nd-order Markov
+// processes with zero-mean Gaussian acceleration"): each value x with rate v evolves over dt as
+//   v ← v e^{−c dt} + σ √dt ε,   x ← x + v dt,   ε ~ N(0, 1),
+// c the damping (1/s) and σ the acceleration noise. Heading, sideways sway, hip abduction and
+// rotation; `sway_restoring` also pulls the sway back towards 0 (1/s²).
+struct PlacementNoise {
+  double heading_damping = 2.0, heading_sigma = 0.3;      // 1/s; rad/s^1.5
+  double sway_damping = 4.0, sway_sigma = 0.05;           // 1/s; m/s^1.5
+  double sway_restoring = 10.0;                           // 1/s²
+  double abduction_damping = 6.0, abduction_sigma = 0.3;  // 1/s; rad/s^1.5
+  double rotation_damping = 6.0, rotation_sigma = 0.3;    // 1/s; rad/s^1.5
+};
+
+struct PlacementState {
+  BodyPlacement value;
+  double heading_rate = 0, sway_rate = 0;          // rad/s, m/s
+  std::array<double, 2> abduction_rate{}, rotation_rate{};  // rad/s
+};
+
+// One step of the placement processes over dt seconds. Turning re-anchors the ground origin so
+// that the point `pivot_along_m` metres along the walking direction (the stance foot) stays
+// where it is: a change of heading bends the path there instead of swinging it about the origin.
+void stepPlacement(PlacementState& placement, const PlacementNoise& noise, double dt_s,
+                   double pivot_along_m, Random& random);
 
 // One particle's full state s_t = (θ_t, η_t, x_t) (the kinematic DOFs k_t are the body
 // model's placement, driven by the tracker).
