@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <sstream>
 #include <stdexcept>
+
+#include "read_file_storage.h"
 
 namespace kneed_walker {
 
@@ -20,6 +24,14 @@ std::vector<std::string> validate(const PriorOptions& o) {
     nonNegative("stride_sd[" + std::to_string(i) + "]", o.stride_sd[i]);
     nonNegative("frame_sd[" + std::to_string(i) + "]", o.frame_sd[i]);
   }
+  const PlacementNoise& pl = o.placement;
+  for (const auto& [name, value] :
+       {std::pair<const char*, double>{"heading_damping", pl.heading_damping},
+        {"heading_sigma", pl.heading_sigma}, {"sway_damping", pl.sway_damping},
+        {"sway_sigma", pl.sway_sigma}, {"sway_restoring", pl.sway_restoring},
+        {"abduction_damping", pl.abduction_damping}, {"abduction_sigma", pl.abduction_sigma},
+        {"rotation_damping", pl.rotation_damping}, {"rotation_sigma", pl.rotation_sigma}})
+    nonNegative(name, value);
   for (int j = 0; j < kNumJoints; ++j) {
     if (!(o.noise_decay[j] >= 0 && o.noise_decay[j] <= 1))
       problems.push_back("noise_decay[" + std::to_string(j) + "] = " + std::to_string(o.noise_decay[j]) +
@@ -27,6 +39,66 @@ std::vector<std::string> validate(const PriorOptions& o) {
     nonNegative("noise_scale[" + std::to_string(j) + "]", o.noise_scale[j]);
   }
   return problems;
+}
+
+PriorOptions loadPriorOptions(const std::string& path) {
+  cv::FileStorage file = readFileStorage(path, "prior configuration");
+  PriorOptions o;
+  std::vector<std::string> problems;
+  auto number = [&](const cv::FileNode& node, const std::string& name, double& value) {
+    if (node.isReal() || node.isInt())
+      value = static_cast<double>(node);
+    else
+      problems.push_back(name + " must be a number");
+  };
+  auto list = [&](const cv::FileNode& node, const std::string& name, double* values, size_t n) {
+    std::vector<double> v;
+    if (node.isSeq()) node >> v;
+    if (v.size() != n) {
+      problems.push_back(name + " must list " + std::to_string(n) + " numbers");
+      return;
+    }
+    std::copy(v.begin(), v.end(), values);
+  };
+  PlacementNoise& pl = o.placement;
+  const std::map<std::string, double*> numbers = {
+      {"knee_damping", &o.knee_damping},
+      {"swing_knee_stiffness", &o.swing_knee_stiffness},
+      {"torso_rest_per_slope", &o.torso_rest_per_slope},
+      {"torso_damping", &o.torso_damping},
+      {"impulse_scale", &o.impulse_scale},
+      {"heading_damping", &pl.heading_damping},
+      {"heading_sigma", &pl.heading_sigma},
+      {"sway_damping", &pl.sway_damping},
+      {"sway_sigma", &pl.sway_sigma},
+      {"sway_restoring", &pl.sway_restoring},
+      {"abduction_damping", &pl.abduction_damping},
+      {"abduction_sigma", &pl.abduction_sigma},
+      {"rotation_damping", &pl.rotation_damping},
+      {"rotation_sigma", &pl.rotation_sigma}};
+  const std::map<std::string, std::pair<double*, size_t>> lists = {
+      {"stride_sd", {o.stride_sd.data(), o.stride_sd.size()}},
+      {"frame_sd", {o.frame_sd.data(), o.frame_sd.size()}},
+      {"noise_decay", {o.noise_decay.data(), o.noise_decay.size()}},
+      {"noise_scale", {o.noise_scale.data(), o.noise_scale.size()}}};
+  const cv::FileNode root = file.root();
+  for (auto it = root.begin(); it != root.end(); ++it) {
+    const std::string key = (*it).name();
+    if (numbers.count(key))
+      number(*it, key, *numbers.at(key));
+    else if (lists.count(key))
+      list(*it, key, lists.at(key).first, lists.at(key).second);
+    else
+      problems.push_back(key + " is not a prior parameter");
+  }
+  for (const auto& problem : validate(o)) problems.push_back(problem);
+  if (!problems.empty()) {
+    std::ostringstream message;
+    message << path << ": invalid prior parameters:";
+    for (const auto& problem : problems) message << "\n  " << problem;
+    throw std::invalid_argument(message.str());
+  }
+  return o;
 }
 
 WalkerPrior::WalkerPrior(const WalkerSimulator& simulator, const OptimalGait& gait,

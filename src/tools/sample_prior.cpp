@@ -2,8 +2,9 @@
 // on a table gait, runs the prior's transition frame by frame, and counts heel strikes and
 // falls until `--strides` strides have ended either way.
 //
-//   rosrun kneed_walker sample_prior --table config/gait_table.yaml [--speed 4.5] [--step 0.7]
-//          [--slope 0] [--strides 1000] [--fps 30] [--seed 1] [--noise-scale 1]
+//   rosrun kneed_walker sample_prior --table config/gait_table.yaml --prior config/prior.yaml
+//          [--speed 4.5] [--step 0.7] [--slope 0] [--strides 1000] [--fps 30] [--seed 1]
+//          [--noise-scale 1]
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -16,11 +17,12 @@ namespace kw = kneed_walker;
 
 int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
-  std::string table_path = "config/gait_table.yaml";
+  std::string table_path = "config/gait_table.yaml", prior_path = "config/prior.yaml";
   double speed_kmh = 4.5, step_m = 0.7, slope = 0.0, fps = 30, noise_scale = 1.0;
   int strides = 1000;
   unsigned seed = 1;
   app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile);
+  app.add_option("--prior", prior_path, "prior parameters (YAML)")->check(CLI::ExistingFile);
   app.add_option("--speed", speed_kmh, "gait speed, km/h");
   app.add_option("--step", step_m, "gait step length, m");
   app.add_option("--slope", slope, "ground slope, rad");
@@ -34,7 +36,7 @@ int main(int argc, char** argv) {
     const kw::WalkerSimulator sim(kw::dimensionlessWalker(kw::BodyProportions{}));
     kw::OptimalGait gait = kw::interpolateGait(table, speed_kmh, step_m, slope);
     gait.stride = sim.stride(gait.controls, gait.start);
-    kw::PriorOptions options;
+    kw::PriorOptions options = kw::loadPriorOptions(prior_path);
     for (double& s : options.noise_scale) s *= noise_scale;
     const kw::WalkerPrior prior(sim, gait, options);
     kw::Random random(seed);

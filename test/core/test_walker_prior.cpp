@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "kneed_walker/core/gait_table.h"
 
@@ -113,6 +114,38 @@ TEST(WalkerPrior, PlacementProcessesTurnAboutTheStanceFoot) {
   stepPlacement(still, PlacementNoise{0, 0, 0, 0, 0, 0, 0, 0, 0}, 0.1, pivot, random);
   EXPECT_EQ(still.value.heading_rad, 0.0);
   EXPECT_EQ(still.value.ground_origin_m, Eigen::Vector2d::Zero());
+}
+
+TEST(WalkerPrior, ShippedConfigLoadsAndMatchesTheDefaults) {
+  const PriorOptions loaded =
+      loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml");
+  const PriorOptions defaults;
+  EXPECT_DOUBLE_EQ(loaded.knee_damping, defaults.knee_damping);
+  EXPECT_DOUBLE_EQ(loaded.torso_rest_per_slope, defaults.torso_rest_per_slope);
+  EXPECT_DOUBLE_EQ(loaded.impulse_scale, defaults.impulse_scale);
+  EXPECT_EQ(loaded.stride_sd, defaults.stride_sd);
+  EXPECT_EQ(loaded.noise_scale, defaults.noise_scale);
+  EXPECT_DOUBLE_EQ(loaded.placement.sway_restoring, defaults.placement.sway_restoring);
+  EXPECT_DOUBLE_EQ(loaded.placement.rotation_sigma, defaults.placement.rotation_sigma);
+}
+
+TEST(WalkerPrior, BadConfigIsRefusedNamingEachProblem) {
+  const std::string path = testing::TempDir() + "bad_prior.yaml";
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs("%YAML:1.0\nknee_damping: soft\nnoise_scale: [1, 2]\nimpulse: 0.1\n", f);
+    std::fclose(f);
+  }
+  try {
+    loadPriorOptions(path);
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("knee_damping must be a number"), std::string::npos) << what;
+    EXPECT_NE(what.find("noise_scale must list 5 numbers"), std::string::npos) << what;
+    EXPECT_NE(what.find("impulse is not a prior parameter"), std::string::npos) << what;
+  }
+  std::remove(path.c_str());
 }
 
 TEST(WalkerPrior, BadOptionsAreRefusedNamingTheField) {

@@ -26,6 +26,19 @@ namespace kneed_walker {
 
 using Random = std::mt19937_64;
 
+// The kinematic DOFs that the walker does not fix (paper §3.4: "damped 2nd-order Markov
+// processes with zero-mean Gaussian acceleration"): each value x with rate v evolves over dt as
+//   v ← v e^{−c dt} + σ √dt ε,   x ← x + v dt,   ε ~ N(0, 1),
+// c the damping (1/s) and σ the acceleration noise. Heading, sideways sway, hip abduction and
+// rotation; `sway_restoring` also pulls the sway back towards 0 (1/s²).
+struct PlacementNoise {
+  double heading_damping = 2.0, heading_sigma = 0.3;      // 1/s; rad/s^1.5
+  double sway_damping = 4.0, sway_sigma = 0.05;           // 1/s; m/s^1.5
+  double sway_restoring = 10.0;                           // 1/s²
+  double abduction_damping = 6.0, abduction_sigma = 0.3;  // 1/s; rad/s^1.5
+  double rotation_damping = 6.0, rotation_sigma = 0.3;    // 1/s; rad/s^1.5
+};
+
 // The sampled stiffnesses: stance knee, hip, torso.
 enum PriorStiffness : int { kPriorStanceKnee = 0, kPriorHip, kPriorTorso, kNumPriorStiffnesses };
 
@@ -41,23 +54,15 @@ struct PriorOptions {
   // Eq. 11 per joint (stance knee, swing knee, hip, torso, stance ankle).
   JointTorques noise_decay{{0.9, 0.9, 0.9, 0.9, 0.9}};           // α_j ∈ [0, 1]
   JointTorques noise_scale{{0.002, 0.001, 0.002, 0.002, 0.001}};  // s_j, torque units M g L
+  PlacementNoise placement;
 };
 
 // Every problem with the options, each naming the field.
 std::vector<std::string> validate(const PriorOptions& options);
 
-// The kinematic DOFs that the walker does not fix (paper §3.4: "damped 2nd-order Markov
-// processes with zero-mean Gaussian acceleration"): each value x with rate v evolves over dt as
-//   v ← v e^{−c dt} + σ √dt ε,   x ← x + v dt,   ε ~ N(0, 1),
-// c the damping (1/s) and σ the acceleration noise. Heading, sideways sway, hip abduction and
-// rotation; `sway_restoring` also pulls the sway back towards 0 (1/s²).
-struct PlacementNoise {
-  double heading_damping = 2.0, heading_sigma = 0.3;      // 1/s; rad/s^1.5
-  double sway_damping = 4.0, sway_sigma = 0.05;           // 1/s; m/s^1.5
-  double sway_restoring = 10.0;                           // 1/s²
-  double abduction_damping = 6.0, abduction_sigma = 0.3;  // 1/s; rad/s^1.5
-  double rotation_damping = 6.0, rotation_sigma = 0.3;    // 1/s; rad/s^1.5
-};
+// Reads options from a YAML file such as config/prior.yaml; keys not given keep their defaults;
+// unknown keys, wrong types and invalid values throw std::invalid_argument naming them.
+PriorOptions loadPriorOptions(const std::string& path);
 
 struct PlacementState {
   BodyPlacement value;
