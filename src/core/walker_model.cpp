@@ -121,12 +121,7 @@ BodyProportions loadBodyProportions(const std::string& path) {
     }
   }
   for (const auto& problem : validate(p)) problems.push_back(problem);
-  if (!problems.empty()) {
-    std::ostringstream message;
-    message << path << ": invalid body proportions:";
-    for (const auto& problem : problems) message << "\n  " << problem;
-    throw std::invalid_argument(message.str());
-  }
+  throwIfProblems(path, "body proportions", problems);
   return p;
 }
 

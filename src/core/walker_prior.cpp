@@ -92,12 +92,7 @@ PriorOptions loadPriorOptions(const std::string& path) {
       problems.push_back(key + " is not a prior parameter");
   }
   for (const auto& problem : validate(o)) problems.push_back(problem);
-  if (!problems.empty()) {
-    std::ostringstream message;
-    message << path << ": invalid prior parameters:";
-    for (const auto& problem : problems) message << "\n  " << problem;
-    throw std::invalid_argument(message.str());
-  }
+  throwIfProblems(path, "prior parameters", problems);
   return o;
 }
 
