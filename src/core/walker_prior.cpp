@@ -19,6 +19,7 @@ std::vector<std::string> validate(const PriorOptions& o) {
   nonNegative("swing_knee_stiffness", o.swing_knee_stiffness);
   nonNegative("torso_damping", o.torso_damping);
   nonNegative("impulse_scale", o.impulse_scale);
+  if (!(o.noise_innovation_limit > 0)) problems.push_back("noise_innovation_limit must be > 0");
   if (!std::isfinite(o.torso_rest_per_slope)) problems.push_back("torso_rest_per_slope must be finite");
   for (int i = 0; i < kNumPriorStiffnesses; ++i) {
     nonNegative("stride_sd[" + std::to_string(i) + "]", o.stride_sd[i]);
@@ -67,6 +68,7 @@ PriorOptions loadPriorOptions(const std::string& path) {
       {"torso_rest_per_slope", &o.torso_rest_per_slope},
       {"torso_damping", &o.torso_damping},
       {"impulse_scale", &o.impulse_scale},
+      {"noise_innovation_limit", &o.noise_innovation_limit},
       {"heading_damping", &pl.heading_damping},
       {"heading_sigma", &pl.heading_sigma},
       {"sway_damping", &pl.sway_damping},
@@ -111,8 +113,13 @@ void WalkerPrior::newStride(WalkerParticle& p, Random& random) const {
     std::normal_distribution<double> mean(gait_stiffness_[i], options_.stride_sd[i]);
     p.stride_mean[i] = std::max(0.0, mean(random));
   }
-  std::exponential_distribution<double> impulse(1.0 / std::max(options_.impulse_scale, 1e-12));
-  p.next_impulse = options_.impulse_scale > 0 ? impulse(random) : 0.0;
+  // The impulse's exponential spread about the gait's optimal impulse (see PriorOptions).
+  double spread = 0.0;
+  if (options_.impulse_scale > 0) {
+    std::exponential_distribution<double> exponential(1.0 / options_.impulse_scale);
+    spread = exponential(random) - options_.impulse_scale;
+  }
+  p.next_impulse = std::max(0.0, gait_.controls.toe_off_impulse + spread);
   p.stride_of_means = p.walker.heel_strikes;
 }
 
@@ -154,10 +161,32 @@ AdvanceReport WalkerPrior::transition(WalkerParticle& p, double dt, Random& rand
     std::normal_distribution<double> value(p.stride_mean[i], options_.frame_sd[i]);
     p.stiffness[i] = std::max(0.0, value(random));
   }
-  std::cauchy_distribution<double> cauchy(0.0, 1.0);
+  // Truncated Cauchy by its inverse CDF: ε = tan(u), u uniform in ±atan(limit).
+  const double u_limit = std::atan(options_.noise_innovation_limit);
+  std::uniform_real_distribution<double> angle(-u_limit, u_limit);
   for (int j = 0; j < kNumJoints; ++j)  // eq. 11
-    p.noise[j] = options_.noise_decay[j] * p.noise[j] + options_.noise_scale[j] * cauchy(random);
+    p.noise[j] = options_.noise_decay[j] * p.noise[j] + options_.noise_scale[j] * std::tan(angle(random));
   return sim_.advance(controls(p), p.walker, dt);
+}
+
+WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides_per_chain,
+                              double dt, Random& random) {
+  if (strides < 1 || strides_per_chain < 1 || !(dt > 0))
+    throw std::invalid_argument("sampleStrides needs strides >= 1, strides_per_chain >= 1, dt > 0");
+  WalkingFraction count;
+  while (count.walked + count.fell < strides) {
+    WalkerParticle particle = prior.sample(0.0, random);
+    for (int in_chain = 0; in_chain < strides_per_chain && count.walked + count.fell < strides;) {
+      const AdvanceReport report = prior.transition(particle, dt, random);
+      count.walked += report.heel_strikes;
+      in_chain += report.heel_strikes;
+      if (report.fell) {
+        ++count.fell;
+        break;
+      }
+    }
+  }
+  return count;
 }
 
 void stepPlacement(PlacementState& p, const PlacementNoise& n, double dt, double pivot_along_m,

@@ -1,10 +1,12 @@
 // sample_prior: how often the stochastic prior (paper §3.4) keeps walking. Samples particles
-// on a table gait, runs the prior's transition frame by frame, and counts heel strikes and
-// falls until `--strides` strides have ended either way.
+// on a table gait just after a heel strike, runs the prior's transition frame by frame, and
+// counts heel strikes and falls until `--strides` strides have ended either way. With
+// `--chain 1` every stride starts from the gait; with `--chain N` a particle walks on for N
+// strides, so that errors can build up from stride to stride.
 //
 //   rosrun kneed_walker sample_prior --table config/gait_table.yaml --prior config/prior.yaml
-//          [--speed 4.5] [--step 0.7] [--slope 0] [--strides 1000] [--fps 30] [--seed 1]
-//          [--noise-scale 1]
+//          [--speed 4.5] [--step 0.7] [--slope 0] [--strides 1000] [--chain 1] [--fps 30]
+//          [--seed 1] [--noise-scale 1]
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -19,7 +21,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
   std::string table_path = "config/gait_table.yaml", prior_path = "config/prior.yaml";
   double speed_kmh = 4.5, step_m = 0.7, slope = 0.0, fps = 30, noise_scale = 1.0;
-  int strides = 1000;
+  int strides = 1000, chain = 1;
   unsigned seed = 1;
   app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile);
   app.add_option("--prior", prior_path, "prior parameters (YAML)")->check(CLI::ExistingFile);
@@ -27,6 +29,7 @@ int main(int argc, char** argv) {
   app.add_option("--step", step_m, "gait step length, m");
   app.add_option("--slope", slope, "ground slope, rad");
   app.add_option("--strides", strides, "strides to sample")->check(CLI::Range(1, 1000000));
+  app.add_option("--chain", chain, "strides a particle walks on before a fresh one starts")->check(CLI::Range(1, 1000000));
   app.add_option("--fps", fps, "frame rate of the transitions, for the reference person")->check(CLI::Range(1.0, 1000.0));
   app.add_option("--seed", seed, "random seed");
   app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(CLI::Range(0.0, 100.0));
@@ -41,23 +44,11 @@ int main(int argc, char** argv) {
     const kw::WalkerPrior prior(sim, gait, options);
     kw::Random random(seed);
     const double dt = (1.0 / fps) / std::sqrt(table.grid.referenceLegLength() / table.grid.gravity);
-    std::uniform_real_distribution<double> phase(0, 1);
-    int walked = 0, falls = 0;
-    while (walked + falls < strides) {
-      kw::WalkerParticle particle = prior.sample(phase(random), random);
-      for (int frame = 0; frame < 100 * fps && walked + falls < strides; ++frame) {
-        const kw::AdvanceReport report = prior.transition(particle, dt, random);
-        walked += report.heel_strikes;
-        if (report.fell) {
-          ++falls;
-          break;
-        }
-      }
-    }
-    std::printf("gait %.1f km/h, %.2f m, slope %.3f rad; %d strides at %.0f fps, noise x%g, seed %u\n",
-                speed_kmh, step_m, slope, walked + falls, fps, noise_scale, seed);
+    const kw::WalkingFraction count = kw::sampleStrides(prior, strides, chain, dt, random);
+    std::printf("gait %.1f km/h, %.2f m, slope %.3f rad; %d strides in chains of %d at %.0f fps, noise x%g, seed %u\n",
+                speed_kmh, step_m, slope, count.walked + count.fell, chain, fps, noise_scale, seed);
     std::printf("walking_fraction=%.4f (%d strides ended in a heel strike, %d in a fall)\n",
-                static_cast<double>(walked) / (walked + falls), walked, falls);
+                count.fraction(), count.walked, count.fell);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sample_prior: %s\n", e.what());
     return 1;

@@ -4,7 +4,7 @@
 //  * Per stride (from each heel strike): the mean stiffnesses κ̄_j of the stance knee, hip and
 //    torso ~ N(gait value, σ̄_j²); the toe-off impulse for the coming contact ~ Exponential.
 //  * Per frame: κ_j(t) ~ N(κ̄_j, σ_j²); the torque noise of eq. 11, η_j(t) = α_j η_j(t−1) +
-//    s_j ε with ε Cauchy, on the knees, hip, torso and the stance leg against the ground.
+//    s_j ε with ε Cauchy (truncated), on the knees, hip, torso and the stance leg against the ground.
 //  * Fixed (paper): knee damping dK1 = dK2 = 0.05, κK2 = 0, torso rest angle φ⁰To = γ/3,
 //    torso damping dTo = 1.5.
 //  * Then the walker is simulated deterministically over the frame.
@@ -48,12 +48,20 @@ struct PriorOptions {
   double torso_rest_per_slope = 1.0 / 3;   // φ⁰To = this × γ
   double torso_damping = 1.5;              // dTo
   // Per-stride means: N(gait value, stride_sd²); per-frame values: N(mean, frame_sd²).
-  std::array<double, kNumPriorStiffnesses> stride_sd{{0.2, 0.01, 0.3}};
-  std::array<double, kNumPriorStiffnesses> frame_sd{{0.05, 0.002, 0.05}};
-  double impulse_scale = 0.015;            // ι ~ Exponential with this mean
+  std::array<double, kNumPriorStiffnesses> stride_sd{{0.2, 0.005, 0.3}};
+  std::array<double, kNumPriorStiffnesses> frame_sd{{0.05, 0.001, 0.05}};
+  // The toe-off impulse: ι = max(0, ι* + e − impulse_scale), e ~ Exponential with mean
+  // impulse_scale, ι* the gait's optimal impulse. The paper draws ι ~ Exponential(0.015)
+  // outright; our optimal gaits need ≈ 0.15 on the level, and at a mean of 0.015 the walker
+  // runs out of energy within a few strides, so the paper's exponential is kept as the spread
+  // about the optimum (mean ι*).
+  double impulse_scale = 0.015;
   // Eq. 11 per joint (stance knee, swing knee, hip, torso, stance ankle).
   JointTorques noise_decay{{0.9, 0.9, 0.9, 0.9, 0.9}};           // α_j ∈ [0, 1]
-  JointTorques noise_scale{{0.002, 0.001, 0.002, 0.002, 0.001}};  // s_j, torque units M g L
+  JointTorques noise_scale{{0.001, 0.0002, 0.0002, 0.001, 0.0002}};  // s_j, torque units M g L
+  // ε is Cauchy truncated to |ε| ≤ this: the heavy tail stays, but no single frame's torque
+  // can be thousands of times its scale (untruncated, 1 frame in 300 exceeds 200 s_j).
+  double noise_innovation_limit = 20.0;
   PlacementNoise placement;
 };
 
@@ -102,6 +110,7 @@ class WalkerPrior {
   WalkerControls controls(const WalkerParticle& particle) const;
 
   const OptimalGait& gait() const { return gait_; }
+  const PriorOptions& options() const { return options_; }
 
  private:
   void newStride(WalkerParticle& particle, Random& random) const;
@@ -111,5 +120,17 @@ class WalkerPrior {
   PriorOptions options_;
   std::array<double, kNumPriorStiffnesses> gait_stiffness_;
 };
+
+// How often the prior's sampled strides keep walking. Each chain starts on the gait just after
+// a heel strike with fresh samples and runs the transition frame by frame (dt, natural time)
+// until `strides_per_chain` strides have ended in a heel strike or one in a fall; chains are
+// sampled until `strides` strides have ended either way.
+struct WalkingFraction {
+  int walked = 0;  // strides that ended in a heel strike
+  int fell = 0;    // strides that ended in a fall
+  double fraction() const { return walked + fell > 0 ? double(walked) / (walked + fell) : 0.0; }
+};
+WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides_per_chain,
+                              double dt, Random& random);
 
 }  // namespace kneed_walker
