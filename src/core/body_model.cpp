@@ -42,7 +42,8 @@ BodyShape BodyShape::forHeight(double h) {
 }
 
 BodyPose bodyPose(const WalkerSimulator& sim, const WalkerState& state, double ground_slope,
-                  const BodyPlacement& placement, const BodyShape& shape) {
+                  const BodyPlacement& placement, const BodyShape& shape,
+                  double metres_per_model_length) {
   const KinematicMap& map = sim.map();
   const WalkerModel& model = sim.model();
   BodyPose pose;
@@ -55,7 +56,11 @@ BodyPose bodyPose(const WalkerSimulator& sim, const WalkerState& state, double g
   const Eigen::Vector3d origin = Eigen::Vector3d(placement.ground_origin_m.x(),
                                                  placement.ground_origin_m.y(), 0) +
                                  placement.sway_m * pose.left;
-  auto vector = [&](Point p) { return Eigen::Vector3d(p.real() * pose.forward + p.imag() * pose.up); };
+  // Walker points are in model lengths; `vector` and `world` return metres.
+  const double scale = metres_per_model_length;
+  auto vector = [&](Point p) {
+    return Eigen::Vector3d(scale * (p.real() * pose.forward + p.imag() * pose.up));
+  };
   auto world = [&](Point p, double lateral) {
     return Eigen::Vector3d(origin + vector(p) + lateral * pose.left);
   };
@@ -68,11 +73,11 @@ BodyPose bodyPose(const WalkerSimulator& sim, const WalkerState& state, double g
 
   pose.joints[kWaist] = world(hip, 0);
   pose.joints[kNeck] = world(shoulder, 0);
-  pose.joints[kHead] = world(shoulder - shape.neck_length_m * down_torso, 0);
+  pose.joints[kHead] = world(shoulder - (shape.neck_length_m / scale) * down_torso, 0);
 
   // Legs: the stance leg is the walker's stance leg; each hangs from its hip joint.
   const int stance = state.stance_leg == Leg::kLeft ? kLeft : kRight;
-  const double ankle_from_knee = model.shank.length - shape.ankle_height_m;
+  const double ankle_from_knee = model.shank.length - shape.ankle_height_m / scale;
   for (int side : {kLeft, kRight}) {
     const bool is_stance = side == stance;
     const Point knee = at(is_stance ? map.stance_knee : map.swing_knee);

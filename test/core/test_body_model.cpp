@@ -54,6 +54,23 @@ TEST(BodyModel, AgreesWithTheWalkerInTheSagittalPlane) {
   EXPECT_NEAR(pose.joints[kHead].z(), 1.75 * 0.93, 0.15) << "a 1.75 m person's head centre";
 }
 
+// A dimensionless walker (the gait table's) scaled by the leg length gives the same pose in
+// metres as the walker scaled to the person.
+TEST(BodyModel, DimensionlessWalkerScalesToMetres) {
+  const WalkerSimulator unit(mcGeerPassiveWalker());
+  const PeriodicGait gait = mcGeerPassiveGait();
+  const BodyShape shape = BodyShape::forHeight(1.75);
+  BodyPlacement placement;
+  placement.heading_rad = 0.4;
+  placement.hip_abduction_rad = {0.1, -0.05};
+  const BodyPose metric = bodyPose(personSimulator(), fromDimensionless(gait.start, personSimulator()),
+                                   0.03, placement, shape);
+  const BodyPose scaled = bodyPose(unit, gait.start, 0.03, placement, shape,
+                                   personSimulator().model().legLength());
+  for (int j = 0; j < kNumBodyJoints; ++j)
+    EXPECT_LT((metric.joints[j] - scaled.joints[j]).norm(), 1e-9) << jointName(BodyJoint(j));
+}
+
 TEST(BodyModel, SegmentsKeepTheirLengthsUnderAnyPlacement) {
   const WalkerSimulator& sim = personSimulator();
   const BodyShape shape = BodyShape::forHeight(1.75);

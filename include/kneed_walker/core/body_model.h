@@ -85,7 +85,10 @@ struct BodyPose {
 };
 
 // The 3D pose of a walker state. `ground_slope` is the walker's γ (positive uphill).
+// `metres_per_model_length` converts the simulator's lengths: 1 for a walker in SI units
+// (scaleToPerson), the person's leg length L for a dimensionless one (the gait table's).
 BodyPose bodyPose(const WalkerSimulator& simulator, const WalkerState& state,
-                  double ground_slope, const BodyPlacement& placement, const BodyShape& shape);
+                  double ground_slope, const BodyPlacement& placement, const BodyShape& shape,
+                  double metres_per_model_length = 1.0);
 
 }  // namespace kneed_walker
