@@ -97,15 +97,44 @@ std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& world_m) c
   return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
 }
 
-std::optional<Eigen::Vector3d> Camera::groundPoint(const Eigen::Vector2d& pixel,
-                                                   double ground_height_m) const {
-  cv::Mat k, d;
+void Camera::save(const std::string& path, double file_length_unit_m) const {
+  cv::FileStorage file(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  if (!file.isOpened()) throw std::runtime_error(path + ": cannot write the calibration");
+  write(file, file_length_unit_m);
+}
+
+void Camera::write(cv::FileStorage& file, double file_length_unit_m) const {
+  if (!(file_length_unit_m > 0)) throw std::invalid_argument("file_length_unit_m must be > 0");
+  cv::Mat k, r, t;
   cv::eigen2cv(k_, k);
-  std::vector<cv::Point2d> in{{pixel.x(), pixel.y()}}, out;
+  cv::eigen2cv(rotation_, r);
+  const Eigen::Vector3d translation = translation_ / file_length_unit_m;
+  cv::eigen2cv(translation, t);
+  file << "image_width" << width_ << "image_height" << height_ << "camera_matrix" << k
+       << "distortion_coefficients" << cv::Mat(1, static_cast<int>(distortion_.size()), CV_64F,
+                                                const_cast<double*>(distortion_.data()))
+       << "R" << r << "t" << t;
+}
+
+std::vector<Eigen::Vector3d> Camera::rays(const std::vector<Eigen::Vector2d>& pixels) const {
+  std::vector<Eigen::Vector3d> result;
+  if (pixels.empty()) return result;
+  cv::Mat k;
+  cv::eigen2cv(k_, k);
+  std::vector<cv::Point2d> in, out;
+  in.reserve(pixels.size());
+  for (const Eigen::Vector2d& p : pixels) in.emplace_back(p.x(), p.y());
   cv::undistortPoints(in, out, k, distortion_.empty() ? cv::Mat() : cv::Mat(distortion_),
                       cv::noArray(), cv::noArray(),
                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-14));
-  const Eigen::Vector3d ray = rotation_.transpose() * Eigen::Vector3d(out[0].x, out[0].y, 1.0);
+  result.reserve(out.size());
+  for (const cv::Point2d& n : out) result.push_back(rotation_.transpose() * Eigen::Vector3d(n.x, n.y, 1.0));
+  return result;
+}
+
+std::optional<Eigen::Vector3d> Camera::groundPoint(const Eigen::Vector2d& pixel,
+                                                   double ground_height_m) const {
+  const Eigen::Vector3d ray = rays({pixel}).front();
   const Eigen::Vector3d origin = centre();
   if (std::abs(ray.z()) < 1e-12) return std::nullopt;
   const double s = (ground_height_m - origin.z()) / ray.z();

@@ -4,6 +4,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -111,6 +112,34 @@ TEST(Camera, PersonBoxesHaveHumanHeightsOnTheGround) {
   std::cout << ratios.size() << " boxes: median projected-pole / box height " << median << "\n";
   EXPECT_GT(median, 0.85);
   EXPECT_LT(median, 1.2);
+}
+
+// save() then load() gives the same camera, in any file unit.
+TEST(Camera, SavedCalibrationLoadsBack) {
+  const Camera pets = petsCamera();
+  const std::string path = ::testing::TempDir() + "/kneed_walker_saved_camera.yml";
+  pets.save(path, 0.001);
+  const Camera loaded = Camera::load(path, 0.001);
+  EXPECT_EQ(loaded.intrinsics(), pets.intrinsics());
+  EXPECT_EQ(loaded.distortion(), pets.distortion());
+  EXPECT_EQ(loaded.rotation(), pets.rotation());
+  EXPECT_LT((loaded.translation() - pets.translation()).norm(), 1e-12);
+  EXPECT_EQ(loaded.width(), 768);
+  EXPECT_EQ(loaded.height(), 576);
+  std::remove(path.c_str());
+}
+
+// Batched rays agree with projection: a point along a pixel's ray projects to that pixel.
+TEST(Camera, RaysInvertProjection) {
+  const Camera pets = petsCamera();
+  const std::vector<Eigen::Vector2d> pixels{{10, 20}, {384, 288}, {700, 550}};
+  const std::vector<Eigen::Vector3d> rays = pets.rays(pixels);
+  ASSERT_EQ(rays.size(), pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const auto back = pets.project(pets.centre() + 20.0 * rays[i].normalized());
+    ASSERT_TRUE(back.has_value());
+    EXPECT_LT((*back - pixels[i]).norm(), 1e-6);
+  }
 }
 
 TEST(Camera, BadCalibrationsAreRefusedWithTheReason) {

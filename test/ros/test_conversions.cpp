@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 #include <sensor_msgs/image_encodings.h>
 
+#include <Eigen/Geometry>
+
 #include <limits>
+#include <stdexcept>
+#include <vector>
 
 namespace kneed_walker {
 namespace {
@@ -60,6 +64,41 @@ TEST(FrameProblem, EachDefectIsNamed) {
     EXPECT_NE(problem.find(c.expected), std::string::npos)
         << "expected '" << c.expected << "', got '" << problem << "'";
   }
+}
+
+// A core camera survives CameraInfo + pose and back: every pixel lands where it did.
+TEST(CameraConversion, RoundTripKeepsProjection) {
+  Eigen::Matrix3d k;
+  k << 1100, 0, 290, 0, 1140, 258, 0, 0, 1;
+  const Eigen::Matrix3d r =
+      (Eigen::AngleAxisd(2.1, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
+  for (const std::vector<double>& d : {std::vector<double>{-0.15, 0.05, 0.001, 0.004, 0.0},
+                                       std::vector<double>{-0.2, 0.05, 0.001, -0.002, 0.01, 0.02, -0.01, 0.003}}) {
+    const Camera camera(k, d, r, Eigen::Vector3d(1.9, -2.4, 34.4), 768, 576);
+    const sensor_msgs::CameraInfo info = toCameraInfo(camera, "camera_optical");
+    EXPECT_EQ(info.distortion_model, d.size() == 8 ? "rational_polynomial" : "plumb_bob");
+    EXPECT_EQ(info.header.frame_id, "camera_optical");
+    EXPECT_EQ(info.P[3], 0.0);
+    EXPECT_EQ(frameProblem(Frame().image, info).find("size"), std::string::npos);
+    const geometry_msgs::TransformStamped pose = cameraPose(camera, "world", "camera_optical");
+    EXPECT_EQ(pose.header.frame_id, "world");
+    EXPECT_EQ(pose.child_frame_id, "camera_optical");
+    const Camera back = toCamera(info, pose);
+    for (const Eigen::Vector3d& point : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, -2, 1.5),
+                                         Eigen::Vector3d(-4, 5, 0.2)}) {
+      const auto a = camera.project(point), b = back.project(point);
+      ASSERT_EQ(a.has_value(), b.has_value());
+      if (a) EXPECT_LT((*a - *b).norm(), 1e-9);
+    }
+  }
+}
+
+TEST(CameraConversion, NonUnitQuaternionIsRefused) {
+  geometry_msgs::TransformStamped pose;
+  pose.transform.rotation.w = 0.5;
+  sensor_msgs::CameraInfo info = Frame().info;
+  EXPECT_THROW(toCamera(info, pose), std::invalid_argument);
 }
 
 }  // namespace

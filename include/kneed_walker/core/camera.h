@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
 
 #include <optional>
 #include <string>
@@ -27,11 +28,19 @@ class Camera {
   // image_width, image_height; t is in `file_length_unit_m` metres per file unit (0.001 for
   // the PETS calibration, which is in mm).
   static Camera load(const std::string& path, double file_length_unit_m);
+  // Writes the same format (t in file units of file_length_unit_m metres); load reads it back.
+  void save(const std::string& path, double file_length_unit_m) const;
+  // The same keys into an open file, beside the caller's own.
+  void write(cv::FileStorage& file, double file_length_unit_m) const;
 
   // Pixel of a world point (metres), distortion applied; nullopt behind the camera (z ≤ 1 cm).
   // Written out rather than calling cv::projectPoints: it is called per body part per
   // particle, and agrees with cv::projectPoints to 1e-6 px (test_camera).
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& world_m) const;
+
+  // The viewing rays of pixels: world-frame directions (not normalised) from centre(),
+  // distortion undone. One call undistorts all pixels at once.
+  std::vector<Eigen::Vector3d> rays(const std::vector<Eigen::Vector2d>& pixels) const;
 
   // The world point on the ground plane Z = ground_height_m seen at a pixel; nullopt when the
   // ray misses the ground (points at or above the horizon).
