@@ -103,6 +103,12 @@ BodyPose bodyPose(const WalkerSimulator& sim, const WalkerState& state, double g
     pose.joints[hip_joint_index + 4] = hip_joint + thigh + shank;  // ankle
     pose.foot_centres[side] = hip_joint + thigh + to_foot;
   }
+  // The stance foot rests on the ground as the walker's does: a turned-out stance leg is
+  // shorter in the sagittal plane, which lowers the body rather than lifting the foot.
+  const double lift = (pose.foot_centres[stance] - world(base, 0)).dot(pose.up);
+  const Eigen::Vector3d down = -lift * pose.up;
+  for (Eigen::Vector3d& joint : pose.joints) joint += down;
+  for (Eigen::Vector3d& foot : pose.foot_centres) foot += down;
   return pose;
 }
 

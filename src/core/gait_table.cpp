@@ -122,6 +122,13 @@ void saveGaitTable(const std::string& path, const GaitTable& table) {
   file << "gravity" << g.gravity;
   file << "speeds_kmh" << g.speeds_kmh << "step_lengths_m" << g.step_lengths_m << "slopes_rad"
        << g.slopes_rad;
+  if (table.fixed.enabled) {
+    file.writeComment("Held fixed while optimising (the prior's values, paper 3.4): knee damping,\n"
+                      "swing knee stiffness, torso rest angle per slope, torso damping.");
+    file << "fixed_controls"
+         << std::vector<double>{table.fixed.knee_damping, table.fixed.swing_knee_stiffness,
+                                table.fixed.torso_rest_per_slope, table.fixed.torso_damping};
+  }
   file << "gaits" << "[";
   for (size_t i = 0; i < table.entries.size(); ++i) {
     const GaitTableEntry& e = table.entries[i];
@@ -162,6 +169,11 @@ GaitTable loadGaitTable(const std::string& path) {
   if (!(g.reference_height_m > 0 && g.leg_length_per_height > 0 && g.gravity > 0))
     throw std::invalid_argument(path + ": reference_height_m, leg_length_per_height and gravity "
                                 "must be positive");
+
+  if (!file["fixed_controls"].empty()) {
+    const auto fixed = readList(root, "fixed_controls", 4, path);
+    table.fixed = {true, fixed[0], fixed[1], fixed[2], fixed[3]};
+  }
 
   const cv::FileNode gaits = file["gaits"];
   if (!gaits.isSeq() || static_cast<int>(gaits.size()) != g.size())

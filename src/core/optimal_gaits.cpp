@@ -80,6 +80,16 @@ class GaitProblem {
       lower_[i] = kControlLower[i];
       upper_[i] = kControlUpper[i];
     }
+    const FixedControls& fixed = options.fixed;
+    if (fixed.enabled) {
+      auto hold = [&](int i, double value) { lower_[i] = upper_[i] = value; };
+      hold(kStanceKneeDamping, fixed.knee_damping);
+      hold(kSwingKneeDamping, fixed.knee_damping);
+      hold(kSwingKneeStiffness, fixed.swing_knee_stiffness);
+      hold(kSwingKneeRestAngle, 0.0);
+      hold(kTorsoRestAngle, fixed.torso_rest_per_slope * target.slope);
+      hold(kTorsoDamping, fixed.torso_damping);
+    }
     const int angles = coordinates.angles();
     for (int i = kNumControlVariables; i < n_; ++i) {
       const bool angle = i - kNumControlVariables < angles;
@@ -160,6 +170,7 @@ class GaitProblem {
       const double h = options_.difference_step * std::max(1.0, std::abs(x_[j]));
       const double up = std::min(x_[j] + h, upper_[j]);
       const double down = std::max(x_[j] - h, lower_[j]);
+      if (up <= down) continue;  // a fixed control: its gradient entries stay 0
       probe[j] = up;
       const double f_plus = evaluate(probe.data(), c_plus.data());
       probe[j] = down;

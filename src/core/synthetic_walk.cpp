@@ -40,6 +40,7 @@ SyntheticWalk synthesizeWalk(const GaitTable& table, const PriorOptions& prior_o
   const auto problems = validate(o);
   if (!problems.empty()) throw std::invalid_argument("synthetic walk: " + problems.front());
 
+  requirePriorTable(table, prior_options);
   SyntheticWalk walk;
   const double leg_length_m = table.grid.leg_length_per_height * o.person_height_m;
   walk.leg_length_m = leg_length_m;
@@ -63,6 +64,7 @@ SyntheticWalk synthesizeWalk(const GaitTable& table, const PriorOptions& prior_o
   const Eigen::Vector2d heading(std::cos(o.heading_rad), std::sin(o.heading_rad));
   // XY distance along the heading of a walker length along the slope.
   const double along_xy_m = leg_length_m * std::cos(o.slope_rad);
+  const double foot_radius_m = sim.model().foot_radius * leg_length_m;
 
   Random random(o.seed);
   std::uniform_real_distribution<double> phase(0.0, 1.0);
@@ -85,9 +87,21 @@ SyntheticWalk synthesizeWalk(const GaitTable& table, const PriorOptions& prior_o
       }
       SyntheticFrame frame;
       frame.time_s = i * frame_s;
-      frame.placement = placement.value;
       frame.walker = particle.walker;
       frame.pose = bodyPose(sim, particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
+      if (i > 0 && particle.walker.heel_strikes == walk.frames.back().walker.heel_strikes) {
+        // The stance foot rolls without slipping (its centre moves by −R Δθ along the walk);
+        // what the placement processes (sway, turning, a turned-out leg) would make it slide
+        // moves the body over the foot instead.
+        const SyntheticFrame& previous = walk.frames.back();
+        const int side = particle.walker.stance_leg == Leg::kLeft ? 0 : 1;
+        const double turn = particle.walker.q[kStanceShank] - previous.walker.q[kStanceShank];
+        const Eigen::Vector3d rolled_to =
+            previous.pose.foot_centres[side] - foot_radius_m * turn * frame.pose.forward;
+        placement.value.ground_origin_m += (rolled_to - frame.pose.foot_centres[side]).head<2>();
+        frame.pose = bodyPose(sim, particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
+      }
+      frame.placement = placement.value;
       walk.frames.push_back(frame);
     }
     if (!fell) return walk;

@@ -98,6 +98,27 @@ PriorOptions loadPriorOptions(const std::string& path) {
   return o;
 }
 
+void requirePriorTable(const GaitTable& table, const PriorOptions& o) {
+  const FixedControls& f = table.fixed;
+  if (!f.enabled)
+    throw std::invalid_argument(
+        "the prior needs a gait table optimised with its fixed controls (optimize_gaits "
+        "--prior-fixed, as config/prior_gait_table.yaml); this one optimised them freely");
+  auto differs = [](double a, double b) { return std::abs(a - b) > 1e-9 * (1 + std::abs(b)); };
+  std::ostringstream message;
+  if (differs(f.knee_damping, o.knee_damping))
+    message << "knee_damping " << o.knee_damping << " (table: " << f.knee_damping << ") ";
+  if (differs(f.swing_knee_stiffness, o.swing_knee_stiffness))
+    message << "swing_knee_stiffness " << o.swing_knee_stiffness << " (table: " << f.swing_knee_stiffness << ") ";
+  if (differs(f.torso_rest_per_slope, o.torso_rest_per_slope))
+    message << "torso_rest_per_slope " << o.torso_rest_per_slope << " (table: " << f.torso_rest_per_slope << ") ";
+  if (differs(f.torso_damping, o.torso_damping))
+    message << "torso_damping " << o.torso_damping << " (table: " << f.torso_damping << ") ";
+  if (!message.str().empty())
+    throw std::invalid_argument("the prior's fixed controls differ from those the gait table was optimised with: " +
+                                message.str() + "(re-run optimize_gaits --prior-fixed with them)");
+}
+
 WalkerPrior::WalkerPrior(const WalkerSimulator& simulator, const OptimalGait& gait,
                          const PriorOptions& options)
     : sim_(simulator), gait_(gait), options_(options) {

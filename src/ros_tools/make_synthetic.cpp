@@ -135,7 +135,12 @@ int run(const Settings& s) {
     tf2_msgs::TFMessage tf;
     tf.transforms.push_back(kw::cameraPose(camera, world_frame, camera_frame));
     tf.transforms.back().header.stamp = first_stamp;
+    // A latched connection, as tf2's static broadcaster makes it (a header given to rosbag
+    // replaces its own, so it carries the message's type too).
     auto latched = boost::make_shared<ros::M_string>();
+    (*latched)["type"] = ros::message_traits::datatype(tf);
+    (*latched)["md5sum"] = ros::message_traits::md5sum(tf);
+    (*latched)["message_definition"] = ros::message_traits::definition(tf);
     (*latched)["latching"] = "1";
     (*latched)["callerid"] = "/make_synthetic";
     bag.write("/tf_static", first_stamp, tf, latched);
@@ -185,7 +190,7 @@ int main(int argc, char** argv) {
   app.set_config("--config", "", "read these options from an INI/TOML file (command line wins)");
   Settings s;
   const std::string share = ros::package::getPath("kneed_walker");
-  s.table = share + "/config/gait_table.yaml";
+  s.table = share + "/config/prior_gait_table.yaml";
   s.prior = share + "/config/prior.yaml";
   kw::SyntheticWalkOptions& w = s.walk;
   app.add_option("--out-dir", s.out_dir, "directory to write into (must exist)")->required()->check(CLI::ExistingDirectory);
@@ -198,7 +203,7 @@ int main(int argc, char** argv) {
                  "'textured' (a paved ground plane), an image, or a video whose median frame is the empty scene")->capture_default_str();
   app.add_option("--background-samples", s.background_samples, "frames of the video in the median")->capture_default_str()
       ->check(CLI::Range(1, 1000));
-  app.add_option("--table", s.table, "gait table")->capture_default_str()->check(CLI::ExistingFile);
+  app.add_option("--table", s.table, "gait table the prior walks around")->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--prior", s.prior, "prior parameters")->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str();
   app.add_option("--step", w.step_length_m, "step length, m")->capture_default_str();

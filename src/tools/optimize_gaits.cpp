@@ -3,6 +3,9 @@
 //
 //   rosrun kneed_walker optimize_gaits [--out config/gait_table.yaml] [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
+//                                      [--prior-fixed] [--seed-table config/gait_table.yaml]
+// With --prior-fixed the controls that the prior fixes are held at its values (the table
+// config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
 //
 // A first gait is found by continuation from McGeer's passive walker at the seed point; every
 // other grid point is then solved warm-started from its already solved neighbours (the points
@@ -76,6 +79,14 @@ int main(int argc, char** argv) {
   app.add_flag("--retry-failed", retry_failed, "with --resume: solve failed points again");
   app.add_option("--threads", threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
   app.add_option("--max-attempts", max_attempts, "warm starts tried per point")->check(CLI::Range(1, 26));
+  bool prior_fixed = false;
+  app.add_flag("--prior-fixed", prior_fixed,
+               "hold the prior's fixed controls (knee and torso damping, swing knee stiffness, torso "
+               "rest angle; paper 3.4) instead of optimising them: the prior's table");
+  std::string seed_table;
+  app.add_option("--seed-table", seed_table,
+                 "warm-start the seed point from this table's gait there instead of by continuation "
+                 "from McGeer's passive gait")->check(CLI::ExistingFile);
   app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h");
   app.add_option("--seed-step", seed_step, "seed grid point: step length, m");
   app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad");
@@ -83,7 +94,7 @@ int main(int argc, char** argv) {
   if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 
   const kw::BodyProportions proportions;
-  const kw::GaitOptimizerOptions options;
+  kw::GaitOptimizerOptions options;
   kw::GaitTable table;
   if (resume && std::filesystem::exists(out)) {
     table = kw::loadGaitTable(out);
@@ -93,7 +104,9 @@ int main(int argc, char** argv) {
   } else {
     table.grid = kw::GaitGrid::paper();
     table.entries.resize(table.grid.size());
+    table.fixed.enabled = prior_fixed;
   }
+  options.fixed = table.fixed;
   const kw::GaitGrid& grid = table.grid;
   const auto start_time = std::chrono::steady_clock::now();
   auto elapsed = [&] {
@@ -115,8 +128,18 @@ int main(int argc, char** argv) {
   const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
                                         [](const kw::GaitTableEntry& e) { return e.feasible; });
   if (!any_feasible) {
-    std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
-    const kw::OptimalGait gait = kw::seedGait(proportions, grid.target(seed), options);
+    kw::OptimalGait gait;
+    if (seed_table.empty()) {
+      std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
+      gait = kw::seedGait(proportions, grid.target(seed), options);
+    } else {
+      std::fprintf(stderr, "optimize_gaits: seeding from %s's gait at the seed point...\n", seed_table.c_str());
+      const kw::GaitTable from = kw::loadGaitTable(seed_table);
+      const auto c = grid.cell(seed);
+      const kw::OptimalGait warm =
+          kw::interpolateGait(from, grid.speeds_kmh[c[0]], grid.step_lengths_m[c[1]], grid.slopes_rad[c[2]]);
+      gait = kw::optimizeGait(proportions, grid.target(seed), warm, options);
+    }
     table.entries[seed] = {true, gait.feasible(), gait};
     writeAtomically(out, table);
     if (!gait.feasible()) {

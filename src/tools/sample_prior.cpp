@@ -4,7 +4,7 @@
 // `--chain 1` every stride starts from the gait; with `--chain N` a particle walks on for N
 // strides, so that errors can build up from stride to stride.
 //
-//   rosrun kneed_walker sample_prior --table config/gait_table.yaml --prior config/prior.yaml
+//   rosrun kneed_walker sample_prior --table config/prior_gait_table.yaml --prior config/prior.yaml
 //          [--speed 4.5] [--step 0.7] [--slope 0] [--strides 1000] [--chain 1] [--fps 30]
 //          [--seed 1] [--noise-scale 1]
 #include <CLI/CLI.hpp>
@@ -19,7 +19,7 @@ namespace kw = kneed_walker;
 
 int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
-  std::string table_path = "config/gait_table.yaml", prior_path = "config/prior.yaml";
+  std::string table_path = "config/prior_gait_table.yaml", prior_path = "config/prior.yaml";
   double speed_kmh = 4.5, step_m = 0.7, slope = 0.0, fps = 30, noise_scale = 1.0;
   int strides = 1000, chain = 1;
   unsigned seed = 1;
@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
     kw::OptimalGait gait = kw::interpolateGait(table, speed_kmh, step_m, slope);
     gait.stride = sim.stride(gait.controls, gait.start);
     kw::PriorOptions options = kw::loadPriorOptions(prior_path);
+    kw::requirePriorTable(table, options);
     for (double& s : options.noise_scale) s *= noise_scale;
     const kw::WalkerPrior prior(sim, gait, options);
     kw::Random random(seed);

@@ -17,8 +17,14 @@ const GaitTable& shipped() {
   return table;
 }
 
-TEST(GaitTable, ShippedTableCoversThePapersGrid) {
-  const GaitTable& table = shipped();
+// Both shipped tables: the free optimum (config/gait_table.yaml, issue 4) and the prior's,
+// optimised with the prior's fixed controls held (config/prior_gait_table.yaml).
+class ShippedGaitTable : public ::testing::TestWithParam<const char*> {
+ protected:
+  GaitTable table = loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/" + GetParam());
+};
+
+TEST_P(ShippedGaitTable, CoversThePapersGrid) {
   EXPECT_EQ(table.grid.speeds_kmh.size(), 9u);
   EXPECT_EQ(table.grid.step_lengths_m.size(), 6u);
   EXPECT_EQ(table.grid.slopes_rad.size(), 5u);
@@ -35,9 +41,8 @@ TEST(GaitTable, ShippedTableCoversThePapersGrid) {
 }
 
 // Every shipped gait is re-simulated from its stored state and controls: it must be periodic
-// and meet its speed and step length.
-TEST(GaitTable, EveryShippedGaitIsPeriodicAndOnTarget) {
-  const GaitTable& table = shipped();
+// and meet its speed and step length; the prior's gaits hold its fixed controls.
+TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
   const WalkerSimulator sim(dimensionlessWalker(BodyProportions{}));
   double worst_residual = 0, worst_speed = 0, worst_step = 0;
   for (int i = 0; i < table.grid.size(); ++i) {
@@ -45,6 +50,14 @@ TEST(GaitTable, EveryShippedGaitIsPeriodicAndOnTarget) {
     if (!e.feasible) continue;
     const GaitTarget target = table.grid.target(i);
     EXPECT_NEAR(e.gait.target.speed, target.speed, 1e-12) << "gait " << i;
+    if (table.fixed.enabled) {
+      const SpringParameters& springs = e.gait.controls.springs;
+      EXPECT_EQ(springs.stance_knee_damping, table.fixed.knee_damping) << "gait " << i;
+      EXPECT_EQ(springs.swing_knee_damping, table.fixed.knee_damping) << "gait " << i;
+      EXPECT_EQ(springs.swing_knee_stiffness, table.fixed.swing_knee_stiffness) << "gait " << i;
+      EXPECT_NEAR(springs.torso_rest_angle, table.fixed.torso_rest_per_slope * target.slope, 1e-15) << "gait " << i;
+      EXPECT_EQ(springs.torso_damping, table.fixed.torso_damping) << "gait " << i;
+    }
     const StrideResult stride = sim.stride(e.gait.controls, e.gait.start);
     ASSERT_TRUE(stride.completed) << "gait " << i;
     const double residual = std::max((stride.end.q - e.gait.start.q).lpNorm<Eigen::Infinity>(),
@@ -59,6 +72,10 @@ TEST(GaitTable, EveryShippedGaitIsPeriodicAndOnTarget) {
   std::cout << "worst fixed-point residual " << worst_residual << ", speed error " << worst_speed
             << ", step length error " << worst_step << "\n";
 }
+
+INSTANTIATE_TEST_SUITE_P(Config, ShippedGaitTable,
+                         ::testing::Values("gait_table.yaml", "prior_gait_table.yaml"),
+                         [](const auto& info) { return std::string(info.param).substr(0, std::string(info.param).find('.')); });
 
 // Mean of f over the feasible gaits of one slope index whose (speed, step) partner at the
 // other slope is feasible too.

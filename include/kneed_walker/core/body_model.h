@@ -84,7 +84,9 @@ struct BodyPose {
   Eigen::Vector3d left;     // unit lateral direction, up × forward
 };
 
-// The 3D pose of a walker state. `ground_slope` is the walker's γ (positive uphill).
+// The 3D pose of a walker state. The stance foot rests on the ground: when the stance leg is
+// turned out (abduction, or rotation with a bent knee) the body is lowered to keep it there.
+// `ground_slope` is the walker's γ (positive uphill).
 // `metres_per_model_length` converts the simulator's lengths: 1 for a walker in SI units
 // (scaleToPerson), the person's leg length L for a dimensionless one (the gait table's).
 BodyPose bodyPose(const WalkerSimulator& simulator, const WalkerState& state,

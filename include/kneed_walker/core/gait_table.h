@@ -48,6 +48,7 @@ struct GaitTableEntry {
 
 struct GaitTable {
   GaitGrid grid;
+  FixedControls fixed;  // controls held fixed while optimising (enabled: the prior's table)
   std::vector<GaitTableEntry> entries;  // grid.size() of them, in grid.index() order
 };
 

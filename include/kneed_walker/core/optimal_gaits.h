@@ -68,8 +68,20 @@ struct OptimalGait {
   }
 };
 
+// Controls held at given values instead of optimised: the paper's prior (§3.4) fixes the knee
+// dampings, the swing knee stiffness, the torso rest angle (relative to the slope) and the
+// torso damping; optimising with them fixed gives gaits that the prior's walkers can follow.
+struct FixedControls {
+  bool enabled = false;
+  double knee_damping = 0.05;            // dK1 = dK2
+  double swing_knee_stiffness = 0.0;     // κK2 (its rest angle is then irrelevant: held at 0)
+  double torso_rest_per_slope = 1.0 / 3;  // φ⁰To = this × γ
+  double torso_damping = 1.5;            // dTo
+};
+
 struct GaitOptimizerOptions {
   EffortWeights weights;
+  FixedControls fixed;
   int max_iterations = 1000;        // SLSQP objective evaluations
   double constraint_tolerance = 1e-9;
   double relative_tolerance = 1e-7;  // on the variables
