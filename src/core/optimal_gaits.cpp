@@ -26,7 +26,7 @@ enum ControlVariable : int {
 
 // Bounds of the controls, dimensionless (torque unit M g L, time unit √(L/g)). The torso
 // spring must hold the torso up against gravity (its gravity torque about the hip is about
-// 0.23 φ), so κTo ≥ 0.5 and dTo ≥ 0.1; its rest angle stays within ±0.15 rad (the paper's
+// 0.23 φ), so κTo ≥ 0.5 and dTo ≥ 0.1; its rest angle stays within ±0.15 rad of the vertical (the paper's
 // prior puts it at γ/3), else the optimum turns the torso spring into a constant hip motor
 // with the torso leaning far forward.
 constexpr double kControlLower[kNumControlVariables] = {0, 0, 0, 0, 0, 0, 0.5, -0.15, 0.1, 0};
@@ -80,6 +80,10 @@ class GaitProblem {
       lower_[i] = kControlLower[i];
       upper_[i] = kControlUpper[i];
     }
+    // The torso's rest angle is bounded about the vertical, not the slope's normal: an upright
+    // torso is at −γ in the walker's slope frame.
+    lower_[kTorsoRestAngle] -= target.slope;
+    upper_[kTorsoRestAngle] -= target.slope;
     const FixedControls& fixed = options.fixed;
     if (fixed.enabled) {
       auto hold = [&](int i, double value) { lower_[i] = upper_[i] = value; };
@@ -311,8 +315,10 @@ OptimalGait initialGaitGuess() {
   return guess;
 }
 
-OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& target,
-                     const GaitOptimizerOptions& options, int target_steps) {
+namespace {
+
+OptimalGait continueFromPassiveGait(const BodyProportions& proportions, const GaitTarget& target,
+                                    const GaitOptimizerOptions& options, int target_steps) {
   // Adaptive continuation on a homotopy parameter a ∈ [0, 1]: a failed step is retried at half
   // the size from the last feasible gait, a successful one lets the next grow.
   auto follow = [&](OptimalGait gait, auto solveAt) {
@@ -345,6 +351,20 @@ OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& targe
                              start.slope + a * (target.slope - start.slope)};
     return optimizeGait(proportions, between, from, options);
   });
+}
+
+}  // namespace
+
+OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& target,
+                     const GaitOptimizerOptions& options, int target_steps) {
+  // A continuation can dead-end on a gait from which no step reaches on; the path taken
+  // depends on the first step size, so try half and double it before giving up.
+  OptimalGait gait;
+  for (const int steps : {target_steps, std::max(1, target_steps / 2), 2 * target_steps}) {
+    gait = continueFromPassiveGait(proportions, target, options, steps);
+    if (gait.feasible()) break;
+  }
+  return gait;
 }
 
 }  // namespace kneed_walker

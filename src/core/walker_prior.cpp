@@ -22,6 +22,7 @@ std::vector<std::string> validate(const PriorOptions& o) {
   if (!(o.noise_innovation_limit > 0)) problems.push_back("noise_innovation_limit must be > 0");
   if (!std::isfinite(o.torso_rest_per_slope)) problems.push_back("torso_rest_per_slope must be finite");
   for (int i = 0; i < kNumPriorStiffnesses; ++i) {
+    nonNegative("stride_mean_offset[" + std::to_string(i) + "]", o.stride_mean_offset[i]);
     nonNegative("stride_sd[" + std::to_string(i) + "]", o.stride_sd[i]);
     nonNegative("frame_sd[" + std::to_string(i) + "]", o.frame_sd[i]);
   }
@@ -79,6 +80,7 @@ PriorOptions loadPriorOptions(const std::string& path) {
       {"rotation_damping", &pl.rotation_damping},
       {"rotation_sigma", &pl.rotation_sigma}};
   const std::map<std::string, std::pair<double*, size_t>> lists = {
+      {"stride_mean_offset", {o.stride_mean_offset.data(), o.stride_mean_offset.size()}},
       {"stride_sd", {o.stride_sd.data(), o.stride_sd.size()}},
       {"frame_sd", {o.frame_sd.data(), o.frame_sd.size()}},
       {"noise_decay", {o.noise_decay.data(), o.noise_decay.size()}},
@@ -131,7 +133,8 @@ WalkerPrior::WalkerPrior(const WalkerSimulator& simulator, const OptimalGait& ga
 
 void WalkerPrior::newStride(WalkerParticle& p, Random& random) const {
   for (int i = 0; i < kNumPriorStiffnesses; ++i) {
-    std::normal_distribution<double> mean(gait_stiffness_[i], options_.stride_sd[i]);
+    std::normal_distribution<double> mean(gait_stiffness_[i] + options_.stride_mean_offset[i],
+                                          options_.stride_sd[i]);
     p.stride_mean[i] = std::max(0.0, mean(random));
   }
   // The impulse's exponential spread about the gait's optimal impulse (see PriorOptions).

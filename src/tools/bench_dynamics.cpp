@@ -15,17 +15,13 @@
 #include <thread>
 #include <vector>
 
+#include "median.h"
 #include "kneed_walker/core/periodic_gait.h"
 
 namespace kw = kneed_walker;
+using kw::tools::median;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Walkers spread over one stride of McGeer's passive gait, scaled to the simulator's
 // person (McGeer's proportions: the torso mass at the hip), each slightly perturbed.

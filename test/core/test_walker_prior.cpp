@@ -60,12 +60,13 @@ TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {
   const int n = 20000;
   const double optimal_impulse = f.gait.controls.toe_off_impulse;
   ASSERT_GT(optimal_impulse, options.impulse_scale) << "so that the clip at 0 never acts";
-  double impulse_sum = 0, hip_sum = 0, lowest_impulse = 1e9;
+  double impulse_sum = 0, hip_sum = 0, knee_sum = 0, lowest_impulse = 1e9;
   for (int i = 0; i < n; ++i) {
     const WalkerParticle p = prior.sample(0.0, random);
     impulse_sum += p.next_impulse;
     lowest_impulse = std::min(lowest_impulse, p.next_impulse);
     hip_sum += p.stride_mean[kPriorHip];
+    knee_sum += p.stride_mean[kPriorStanceKnee];
   }
   // ι* + Exponential(mean 0.015) − 0.015: mean ι*, standard error 0.015 / √n ≈ 1e-4, and
   // never below ι* − 0.015.
@@ -73,6 +74,10 @@ TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {
   EXPECT_GE(lowest_impulse, optimal_impulse - options.impulse_scale);
   EXPECT_LT(lowest_impulse, optimal_impulse - 0.99 * options.impulse_scale);
   EXPECT_NEAR(hip_sum / n, f.gait.controls.springs.hip_stiffness, 6 * options.stride_sd[kPriorHip] / std::sqrt(n) + 1e-3);
+  // The stance knee's mean is raised by its offset (clipped at 0, which lifts the mean by
+  // at most 0.02 here: the level gait's knee stiffness is near 0).
+  EXPECT_NEAR(knee_sum / n,
+              f.gait.controls.springs.stance_knee_stiffness + options.stride_mean_offset[kPriorStanceKnee], 0.03);
 }
 
 // Eq. 11 with α = 0 is white Cauchy noise of scale s: the median of |η| is s.
@@ -163,6 +168,7 @@ TEST(WalkerPrior, ShippedConfigLoadsAndMatchesTheDefaults) {
   EXPECT_DOUBLE_EQ(loaded.knee_damping, defaults.knee_damping);
   EXPECT_DOUBLE_EQ(loaded.torso_rest_per_slope, defaults.torso_rest_per_slope);
   EXPECT_DOUBLE_EQ(loaded.impulse_scale, defaults.impulse_scale);
+  EXPECT_EQ(loaded.stride_mean_offset, defaults.stride_mean_offset);
   EXPECT_EQ(loaded.stride_sd, defaults.stride_sd);
   EXPECT_EQ(loaded.noise_scale, defaults.noise_scale);
   EXPECT_DOUBLE_EQ(loaded.placement.sway_restoring, defaults.placement.sway_restoring);

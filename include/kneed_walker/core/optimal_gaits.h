@@ -101,8 +101,9 @@ OptimalGait initialGaitGuess();
 
 // A first optimal gait for `target` by continuation from McGeer's passive gait: the torso's
 // centre of mass is raised from the hip to its place in `proportions`, then the target moves
-// from the passive gait's to `target`, each step warm-started from the last. The result's
-// feasible() says whether every step succeeded.
+// from the passive gait's to `target`, each step warm-started from the last; a continuation
+// that dead-ends is tried again with half and then double the first step count. The result's
+// feasible() says whether one succeeded.
 OptimalGait seedGait(const BodyProportions& proportions, const GaitTarget& target,
                      const GaitOptimizerOptions& options = {}, int target_steps = 8);
 

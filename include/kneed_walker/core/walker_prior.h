@@ -48,7 +48,10 @@ struct PriorOptions {
   double swing_knee_stiffness = 0.0;       // κK2
   double torso_rest_per_slope = 1.0 / 3;   // φ⁰To = this × γ
   double torso_damping = 1.5;              // dTo
-  // Per-stride means: N(gait value, stride_sd²); per-frame values: N(mean, frame_sd²).
+  // Per-stride means: N(gait value + stride_mean_offset, stride_sd²); per-frame values:
+  // N(mean, frame_sd²). The paper raises the stance knee's and torso's means above the optimal
+  // gaits' "to account for differences between tracked motions and optimal cyclic gaits".
+  std::array<double, kNumPriorStiffnesses> stride_mean_offset{{0.3, 0.0, 0.0}};
   std::array<double, kNumPriorStiffnesses> stride_sd{{0.2, 0.005, 0.3}};
   std::array<double, kNumPriorStiffnesses> frame_sd{{0.05, 0.001, 0.05}};
   // The toe-off impulse: ι = max(0, ι* + e − impulse_scale), e ~ Exponential with mean

@@ -1,0 +1,83 @@
+// bench_body_projection: how fast a particle's walker state becomes image regions (the
+// likelihood's per-particle front end): the 3D body pose (bodyPose) and the outlines of its
+// parts in the image (projectBodyParts), for a batch of walking poses seen by a calibrated
+// camera. Prints the median time per particle on one thread and on all cores.
+//
+//   rosrun kneed_walker bench_body_projection --camera ../shared/data/pets2009/View_001_camera.yml
+//          [--table config/prior_gait_table.yaml] [--prior config/prior.yaml]
+//          [--particles 5000] [--repeats 15]
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include "median.h"
+#include "kneed_walker/core/body_projection.h"
+#include "kneed_walker/core/synthetic_walk.h"
+
+namespace kw = kneed_walker;
+using kw::tools::median;
+
+int main(int argc, char** argv) {
+  CLI::App app{"Times body pose + part projection per particle."};
+  std::string camera_path, table_path = "config/prior_gait_table.yaml", prior_path = "config/prior.yaml";
+  double camera_unit_m = 0.001;
+  int particles = 5000, repeats = 15;
+  app.add_option("--camera", camera_path, "calibration (OpenCV YAML)")->required()->check(CLI::ExistingFile);
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str();
+  app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--particles", particles, "poses in the batch")->check(CLI::Range(1, 1000000));
+  app.add_option("--repeats", repeats, "timed repeats; the median is reported")->check(CLI::Range(1, 1000));
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const kw::Camera camera = kw::Camera::load(camera_path, camera_unit_m);
+    // Walking states and placements from a long synthetic walk in view of the camera.
+    kw::SyntheticWalkOptions walk_options;
+    walk_options.start_m = camera.groundPoint({0.5 * camera.width(), 0.75 * camera.height()})->head<2>();
+    walk_options.duration_s = 10;
+    walk_options.fps = 30;
+    const kw::SyntheticWalk walk =
+        kw::synthesizeWalk(kw::loadGaitTable(table_path), kw::loadPriorOptions(prior_path), walk_options);
+    const kw::WalkerSimulator sim(kw::dimensionlessWalker(kw::BodyProportions{}));
+    const kw::BodyShape shape = kw::BodyShape::forHeight(walk_options.person_height_m);
+    std::vector<const kw::SyntheticFrame*> batch(particles);
+    for (int i = 0; i < particles; ++i) batch[i] = &walk.frames[i % walk.frames.size()];
+    std::vector<kw::BodyOutlines> outlines(particles);
+
+    auto project = [&](int begin, int end) {
+      for (int i = begin; i < end; ++i) {
+        const kw::BodyPose pose = kw::bodyPose(sim, batch[i]->walker, walk_options.slope_rad,
+                                               batch[i]->placement, shape, walk.leg_length_m);
+        kw::projectBodyParts(camera, pose, shape, outlines[i]);
+      }
+    };
+    auto time = [&](int threads) {
+      std::vector<double> us;
+      for (int r = 0; r < repeats; ++r) {
+        const auto start = std::chrono::steady_clock::now();
+        std::vector<std::thread> workers;
+        for (int t = 0; t < threads; ++t)
+          workers.emplace_back(project, particles * t / threads, particles * (t + 1) / threads);
+        for (auto& w : workers) w.join();
+        us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count() /
+                     particles);
+      }
+      return median(us);
+    };
+    const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const double one = time(1), all = time(cores);
+    int visible = 0;
+    for (const auto& o : outlines) visible += o[kw::kTorsoPart].visible;
+    std::printf("%d particles, %d repeats; %d of them with the torso in view\n", particles, repeats, visible);
+    std::printf("body_projection_us_per_particle=%.2f (1 thread)\n", one);
+    std::printf("body_projection_us_per_particle=%.2f (%d threads)\n", all, cores);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_body_projection: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

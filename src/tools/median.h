@@ -1,0 +1,15 @@
+// The median of timings, for the benchmark tools (they report medians: shared machines are noisy).
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+namespace kneed_walker::tools {
+
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace kneed_walker::tools
