@@ -218,6 +218,29 @@ GaitTable loadGaitTable(const std::string& path) {
   return table;
 }
 
+int keepLowerEffort(GaitTable& table, const GaitTable& other) {
+  const GaitGrid &a = table.grid, &b = other.grid;
+  if (a.speeds_kmh != b.speeds_kmh || a.step_lengths_m != b.step_lengths_m ||
+      a.slopes_rad != b.slopes_rad || a.reference_height_m != b.reference_height_m ||
+      a.leg_length_per_height != b.leg_length_per_height || a.gravity != b.gravity)
+    throw std::invalid_argument("keepLowerEffort: the gait tables have different grids");
+  const FixedControls &fa = table.fixed, &fb = other.fixed;
+  if (fa.enabled != fb.enabled ||
+      (fa.enabled && (fa.knee_damping != fb.knee_damping || fa.swing_knee_stiffness != fb.swing_knee_stiffness ||
+                      fa.torso_rest_per_slope != fb.torso_rest_per_slope || fa.torso_damping != fb.torso_damping)))
+    throw std::invalid_argument("keepLowerEffort: the gait tables hold different controls fixed");
+  int taken = 0;
+  for (size_t i = 0; i < table.entries.size(); ++i) {
+    const GaitTableEntry& theirs = other.entries[i];
+    GaitTableEntry& ours = table.entries[i];
+    if (theirs.feasible && (!ours.feasible || theirs.gait.effort < ours.gait.effort)) {
+      ours = theirs;
+      ++taken;
+    }
+  }
+  return taken;
+}
+
 OptimalGait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
                             double slope_rad) {
   const GaitGrid& g = table.grid;

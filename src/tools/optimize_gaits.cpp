@@ -4,6 +4,7 @@
 //   rosrun kneed_walker optimize_gaits [--out config/gait_table.yaml] [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
 //                                      [--prior-fixed] [--seed-table config/gait_table.yaml]
+//   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
 // config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
 //
@@ -83,7 +84,10 @@ int main(int argc, char** argv) {
   app.add_flag("--prior-fixed", prior_fixed,
                "hold the prior's fixed controls (knee and torso damping, swing knee stiffness, torso "
                "rest angle; paper 3.4) instead of optimising them: the prior's table");
-  std::string seed_table;
+  std::string seed_table, merge_table;
+  app.add_option("--merge", merge_table,
+                 "fold this table's gaits into --out where they have the lower effort, then exit "
+                 "(the optimiser finds local optima: keep the better of two runs)")->check(CLI::ExistingFile);
   app.add_option("--seed-table", seed_table,
                  "warm-start the seed point from this table's gait there instead of by continuation "
                  "from McGeer's passive gait")->check(CLI::ExistingFile);
@@ -92,6 +96,22 @@ int main(int argc, char** argv) {
   app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad");
   CLI11_PARSE(app, argc, argv);
   if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+  if (!merge_table.empty()) {
+    try {
+      kw::GaitTable table = kw::loadGaitTable(out);
+      const int taken = kw::keepLowerEffort(table, kw::loadGaitTable(merge_table));
+      writeAtomically(out, table);
+      int feasible = 0;
+      for (const auto& e : table.entries) feasible += e.feasible;
+      std::fprintf(stderr, "optimize_gaits: took %d gaits of lower effort from %s; %d of %d feasible; wrote %s\n",
+                   taken, merge_table.c_str(), feasible, table.grid.size(), out.c_str());
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "optimize_gaits: %s\n", e.what());
+      return 1;
+    }
+  }
 
   const kw::BodyProportions proportions;
   kw::GaitOptimizerOptions options;

@@ -193,6 +193,26 @@ TEST(GaitTable, InterpolatesInsideTheGridAndRefusesOutside) {
   EXPECT_THROW(interpolateGait(table, 5.0, 0.7, 0.2), std::out_of_range);
 }
 
+// Of two runs, the lower effort wins per grid point; a feasible gait beats none; tables of
+// other grids or other fixed controls are refused.
+TEST(GaitTable, KeepsTheLowerEffortOfTwoRuns) {
+  GaitTable table = shipped(), other = shipped();
+  int first = -1, second = -1;
+  for (int i = 1; i < table.grid.size() && second < 0; ++i)
+    if (table.entries[i].feasible) (first < 0 ? first : second) = i;
+  other.entries[first].gait.effort -= 1.0;    // better in the other run
+  other.entries[second].gait.effort += 1.0;   // worse in the other run
+  table.entries[0].feasible = false;          // missing here, present there (if feasible)
+  const bool zero_feasible = other.entries[0].feasible;
+  EXPECT_EQ(keepLowerEffort(table, other), 1 + (zero_feasible ? 1 : 0));
+  EXPECT_EQ(table.entries[first].gait.effort, other.entries[first].gait.effort);
+  EXPECT_EQ(table.entries[second].gait.effort, shipped().entries[second].gait.effort);
+  other.grid.slopes_rad.back() += 0.01;
+  EXPECT_THROW(keepLowerEffort(table, other), std::invalid_argument);
+  EXPECT_THROW(keepLowerEffort(table, loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior_gait_table.yaml")),
+               std::invalid_argument);
+}
+
 TEST(GaitTable, SavesAndLoadsLosslessly) {
   const std::string path = testing::TempDir() + "gait_table_round_trip.yaml";
   saveGaitTable(path, shipped());

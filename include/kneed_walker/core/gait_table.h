@@ -56,6 +56,12 @@ void saveGaitTable(const std::string& path, const GaitTable& table);
 // Throws std::invalid_argument naming the problem for a missing, malformed or inconsistent file.
 GaitTable loadGaitTable(const std::string& path);
 
+// Folds `other`'s feasible gaits into `table` where they have the lower effort (eq. 9): the
+// optimiser finds local optima, and of two runs the lower effort is the better optimum.
+// Returns how many grid points were taken from `other`. Throws std::invalid_argument when the
+// tables' grids or fixed controls differ.
+int keepLowerEffort(GaitTable& table, const GaitTable& other);
+
 // The gait at any (speed, step length, slope) inside the grid: controls and start state
 // interpolated trilinearly between the eight surrounding feasible gaits (dimensionless). Throws
 // std::out_of_range naming the axis for a target outside the grid, or the missing corner gait.
