@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 namespace {
 
 namespace enc = sensor_msgs::image_encodings;
@@ -52,7 +52,7 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
   return problem.str();
 }
 
-sensor_msgs::CameraInfo toCameraInfo(const Camera& camera, const std::string& frame_id) {
+sensor_msgs::CameraInfo toCameraInfo(const core::vision::Camera& camera, const std::string& frame_id) {
   sensor_msgs::CameraInfo info;
   info.header.frame_id = frame_id;
   info.width = static_cast<std::uint32_t>(camera.width());
@@ -74,7 +74,7 @@ sensor_msgs::CameraInfo toCameraInfo(const Camera& camera, const std::string& fr
   return info;
 }
 
-geometry_msgs::TransformStamped cameraPose(const Camera& camera, const std::string& world_frame,
+geometry_msgs::TransformStamped cameraPose(const core::vision::Camera& camera, const std::string& world_frame,
                                            const std::string& camera_frame) {
   geometry_msgs::TransformStamped pose;
   pose.header.frame_id = world_frame;
@@ -91,7 +91,7 @@ geometry_msgs::TransformStamped cameraPose(const Camera& camera, const std::stri
   return pose;
 }
 
-Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::TransformStamped& pose) {
+core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::TransformStamped& pose) {
   Eigen::Matrix3d k;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) k(r, c) = info.K[3 * r + c];
@@ -106,8 +106,8 @@ Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::Transf
   std::vector<double> distortion = info.D;
   // plumb_bob's k3 = 0 and no distortion at all are the same camera.
   if (std::all_of(distortion.begin(), distortion.end(), [](double d) { return d == 0.0; })) distortion.clear();
-  return Camera(k, distortion, camera_to_world.transpose(), -camera_to_world.transpose() * centre,
+  return core::vision::Camera(k, distortion, camera_to_world.transpose(), -camera_to_world.transpose() * centre,
                 static_cast<int>(info.width), static_cast<int>(info.height));
 }
 
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

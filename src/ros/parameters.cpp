@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 namespace {
 
 // Reads typed parameters under one namespace and collects every problem instead of stopping
@@ -100,7 +100,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   TrackerNodeConfig config;
   ParameterReader reader(private_nh);
 
-  TrackerOptions& t = config.tracker;
+  core::tracking::TrackerOptions& t = config.tracker;
   reader.read("num_particles", t.num_particles);
   reader.read("resample_ess_threshold", t.resample_ess_threshold);
   reader.read("resample_lag_frames", t.resample_lag_frames);
@@ -145,4 +145,4 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   return config;
 }
 
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

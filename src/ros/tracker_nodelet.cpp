@@ -12,7 +12,7 @@
 //          /tf (body_<id> and REP 155 joint frames), /diagnostics.
 //
 // Callbacks run on this nodelet's single-threaded queue; the per-particle work will use its
-// own worker threads (TrackerOptions::num_threads).
+// own worker threads (core::tracking::TrackerOptions::num_threads).
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/PoseArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -33,7 +33,7 @@
 #include "kneed_walker/ros/conversions.h"
 #include "kneed_walker/ros/parameters.h"
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 
 class TrackerNodelet : public nodelet::Nodelet {
  private:
@@ -153,6 +153,6 @@ void TrackerNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapp
   status.add("input", camera_subscriber_.getTopic());
 }
 
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue
 
-PLUGINLIB_EXPORT_CLASS(kneed_walker::TrackerNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(kneed_walker::ros_glue::TrackerNodelet, nodelet::Nodelet)

@@ -33,16 +33,17 @@
 #include <iomanip>
 #include <sstream>
 
-#include "kneed_walker/core/synthetic_scene.h"
+#include "kneed_walker/core/synthetic/synthetic_scene.h"
+#include "kneed_walker/core/vision/background.h"
 #include "kneed_walker/ros/conversions.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 namespace {
 
 struct Settings {
   std::string out_dir, name = "synthetic";
-  std::string table, prior;
+  std::string table, prior, walker_model;
   std::string camera_path, background = "textured";
   double camera_unit_m = 0.001;
   int background_samples = 25;
@@ -51,7 +52,7 @@ struct Settings {
   bool occluder = false;
   bool heading_given = false;
   double start_stamp_s = 1.7e9;
-  kw::SyntheticWalkOptions walk;
+  kw::synthetic::SyntheticWalkOptions walk;
 };
 
 bool isImageFile(const std::string& path) {
@@ -63,15 +64,15 @@ bool isImageFile(const std::string& path) {
   return false;
 }
 
-cv::Mat background(const Settings& s, const kw::Camera& camera, const kw::GroundPlane& ground) {
+cv::Mat background(const Settings& s, const kw::vision::Camera& camera, const kw::vision::GroundPlane& ground) {
   cv::Mat image;
   if (s.background == "textured") {
-    image = kw::texturedGround(camera, ground, s.walk.seed);
+    image = kw::synthetic::texturedGround(camera, ground, s.walk.seed);
   } else if (isImageFile(s.background)) {
     image = cv::imread(s.background, cv::IMREAD_COLOR);
     if (image.empty()) throw std::runtime_error(s.background + ": cannot read the background image");
   } else {
-    image = kw::medianBackground(s.background, s.background_samples);
+    image = kw::vision::medianBackground(s.background, s.background_samples);
   }
   if (image.cols != camera.width() || image.rows != camera.height())
     throw std::runtime_error("the background is " + std::to_string(image.cols) + "x" +
@@ -80,7 +81,7 @@ cv::Mat background(const Settings& s, const kw::Camera& camera, const kw::Ground
   return image;
 }
 
-void writeCameraAndGround(const std::string& path, const kw::Camera& camera, const kw::GroundPlane& ground) {
+void writeCameraAndGround(const std::string& path, const kw::vision::Camera& camera, const kw::vision::GroundPlane& ground) {
   cv::FileStorage file(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
   if (!file.isOpened()) throw std::runtime_error(path + ": cannot write the calibration");
   camera.write(file, 0.001);
@@ -89,15 +90,15 @@ void writeCameraAndGround(const std::string& path, const kw::Camera& camera, con
 }
 
 // Pixel height of the person (head top to lowest foot) in a frame, for the summary.
-double pixelHeight(const kw::Camera& camera, const kw::BodyPose& pose, double height_m) {
-  const auto top = camera.project(pose.joints[kw::kHead] + 0.06 * height_m * Eigen::Vector3d::UnitZ());
+double pixelHeight(const kw::vision::Camera& camera, const kw::body::BodyPose& pose, double height_m) {
+  const auto top = camera.project(pose.joints[kw::body::kHead] + 0.06 * height_m * Eigen::Vector3d::UnitZ());
   const auto foot = camera.project(0.5 * (pose.foot_centres[0] + pose.foot_centres[1]));
   return top && foot ? (*foot - *top).norm() : 0.0;
 }
 
 int run(const Settings& s) {
-  const kw::Camera camera = kw::Camera::load(s.camera_path, s.camera_unit_m);
-  kw::SyntheticWalkOptions options = s.walk;
+  const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
+  kw::synthetic::SyntheticWalkOptions options = s.walk;
   const Eigen::Vector2d start_pixel = s.start_pixel.size() == 2
                                           ? Eigen::Vector2d(s.start_pixel[0], s.start_pixel[1])
                                           : Eigen::Vector2d(0.75 * camera.width(), 0.85 * camera.height());
@@ -111,13 +112,14 @@ int run(const Settings& s) {
     const double sign = ahead && ahead->x() < start_pixel.x() ? 1.0 : -1.0;
     options.heading_rad = std::atan2(sign * across.y(), sign * across.x());
   }
-  const kw::SyntheticWalk walk =
-      kw::synthesizeWalk(kw::loadGaitTable(s.table), kw::loadPriorOptions(s.prior), options);
-  const kw::BodyShape shape = kw::BodyShape::forHeight(options.person_height_m);
+  const kw::synthetic::SyntheticWalk walk =
+      kw::synthetic::synthesizeWalk(kw::gait::loadGaitTable(s.table, kw::dynamics::loadBodyProportions(s.walker_model)),
+                                    kw::prior::loadPriorOptions(s.prior), options);
+  const kw::body::BodyShape shape = kw::body::BodyShape::forHeight(options.person_height_m);
   const cv::Mat scene = background(s, camera, walk.ground);
-  const kw::SyntheticFrame& middle = walk.frames[walk.frames.size() / 2];
-  const kw::Occluder occluder = kw::crossingOccluder(
-      camera, middle.pose.joints[kw::kWaist], middle.time_s, middle.pose.forward.head<2>());
+  const kw::synthetic::SyntheticFrame& middle = walk.frames[walk.frames.size() / 2];
+  const kw::synthetic::Occluder occluder = kw::synthetic::crossingOccluder(
+      camera, middle.pose.joints[kw::body::kWaist], middle.time_s, middle.pose.forward.head<2>());
 
   const std::string stem = s.out_dir + "/" + s.name;
   rosbag::Bag bag(stem + ".bag", rosbag::bagmode::Write);
@@ -133,7 +135,7 @@ int run(const Settings& s) {
   const ros::Time first_stamp(s.start_stamp_s);
   {
     tf2_msgs::TFMessage tf;
-    tf.transforms.push_back(kw::cameraPose(camera, world_frame, camera_frame));
+    tf.transforms.push_back(kneed_walker::ros_glue::cameraPose(camera, world_frame, camera_frame));
     tf.transforms.back().header.stamp = first_stamp;
     // A latched connection, as tf2's static broadcaster makes it (a header given to rosbag
     // replaces its own, so it carries the message's type too).
@@ -145,14 +147,14 @@ int run(const Settings& s) {
     (*latched)["callerid"] = "/make_synthetic";
     bag.write("/tf_static", first_stamp, tf, latched);
   }
-  sensor_msgs::CameraInfo info = kw::toCameraInfo(camera, camera_frame);
+  sensor_msgs::CameraInfo info = kneed_walker::ros_glue::toCameraInfo(camera, camera_frame);
   double smallest_px = 1e9, largest_px = 0;
   for (size_t i = 0; i < walk.frames.size(); ++i) {
-    const kw::SyntheticFrame& frame = walk.frames[i];
+    const kw::synthetic::SyntheticFrame& frame = walk.frames[i];
     cv::Mat image = scene.clone();
-    kw::drawPerson(image, camera, frame.pose, shape, kw::PersonAppearance{});
-    if (s.occluder) kw::drawOccluder(image, camera, occluder, frame.time_s);
-    kw::addSensorNoise(image, s.noise_sigma, options.seed * 1000003u + i);
+    kw::synthetic::drawPerson(image, camera, frame.pose, shape, kw::synthetic::PersonAppearance{});
+    if (s.occluder) kw::synthetic::drawOccluder(image, camera, occluder, frame.time_s);
+    kw::synthetic::addSensorNoise(image, s.noise_sigma, options.seed * 1000003u + i);
 
     const ros::Time stamp = first_stamp + ros::Duration(frame.time_s);
     std_msgs::Header header;
@@ -163,9 +165,9 @@ int run(const Settings& s) {
     bag.write("/camera/image_raw", stamp, *cv_bridge::CvImage(header, "bgr8", image).toImageMsg());
     bag.write("/camera/camera_info", stamp, info);
     video.write(image);
-    for (int j = 0; j < kw::kNumBodyJoints; ++j) {
+    for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
       const Eigen::Vector3d& p = frame.pose.joints[j];
-      csv << i << ',' << std::setprecision(6) << stamp.toSec() << ',' << kw::jointName(kw::BodyJoint(j)) << ','
+      csv << i << ',' << std::setprecision(6) << stamp.toSec() << ',' << kw::body::jointName(kw::body::BodyJoint(j)) << ','
           << std::setprecision(6) << p.x() << ',' << p.y() << ',' << p.z() << '\n';
     }
     const double px = pixelHeight(camera, frame.pose, options.person_height_m);
@@ -192,7 +194,8 @@ int main(int argc, char** argv) {
   const std::string share = ros::package::getPath("kneed_walker");
   s.table = share + "/config/prior_gait_table.yaml";
   s.prior = share + "/config/prior.yaml";
-  kw::SyntheticWalkOptions& w = s.walk;
+  s.walker_model = share + "/config/walker_model.yaml";
+  kw::synthetic::SyntheticWalkOptions& w = s.walk;
   app.add_option("--out-dir", s.out_dir, "directory to write into (must exist)")->required()->check(CLI::ExistingDirectory);
   app.add_option("--name", s.name, "file name stem of the outputs")->capture_default_str();
   app.add_option("--camera", s.camera_path, "calibration (OpenCV YAML: camera_matrix, distortion_coefficients, R, t)")
@@ -205,6 +208,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000));
   app.add_option("--table", s.table, "gait table the prior walks around")->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--prior", s.prior, "prior parameters")->capture_default_str()->check(CLI::ExistingFile);
+  app.add_option("--walker-model", s.walker_model, "body proportions; the table must be made for them")
+      ->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str();
   app.add_option("--step", w.step_length_m, "step length, m")->capture_default_str();
   app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill")->capture_default_str();

@@ -6,38 +6,37 @@
 //   rosrun kneed_walker bench_dynamics [--particles 5000] [--frames 30] [--fps 30]
 //                                      [--repeats 7] [--max-step 0.02] [--seed 1]
 #include <CLI/CLI.hpp>
-#include <opencv2/core.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <random>
-#include <thread>
 #include <vector>
 
 #include "median.h"
-#include "kneed_walker/core/periodic_gait.h"
+#include "kneed_walker/core/common/parallel.h"
+#include "kneed_walker/core/optimizer/periodic_gait.h"
 
-namespace kw = kneed_walker;
-using kw::tools::median;
+namespace kw = kneed_walker::core;
+using kneed_walker::tools::median;
 
 namespace {
 
 // Walkers spread over one stride of McGeer's passive gait, scaled to the simulator's
 // person (McGeer's proportions: the torso mass at the hip), each slightly perturbed.
-std::vector<kw::WalkerState> gaitBatch(const kw::WalkerSimulator& sim,
-                                       const kw::WalkerControls& controls, int count,
+std::vector<kw::dynamics::WalkerState> gaitBatch(const kw::dynamics::WalkerSimulator& sim,
+                                       const kw::dynamics::WalkerControls& controls, int count,
                                        unsigned seed) {
-  const kw::PeriodicGait gait = kw::mcGeerPassiveGait();
-  const kw::WalkerState start = kw::fromDimensionless(gait.start, sim);
+  const kw::optimizer::PeriodicGait gait = kw::optimizer::mcGeerPassiveGait();
+  const kw::dynamics::WalkerState start = kw::optimizer::fromDimensionless(gait.start, sim);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> phase(0, gait.stride.duration * sim.naturalTime());
   std::normal_distribution<double> noise(0, 0.01);
-  std::vector<kw::WalkerState> batch(count);
+  std::vector<kw::dynamics::WalkerState> batch(count);
   for (auto& s : batch) {
     s = start;
     sim.advance(controls, s, phase(rng));
-    for (int j = 0; j < kw::kNumCoordinates; ++j) s.qdot[j] += noise(rng);
+    for (int j = 0; j < kw::dynamics::kNumCoordinates; ++j) s.qdot[j] += noise(rng);
   }
   return batch;
 }
@@ -47,7 +46,7 @@ std::vector<kw::WalkerState> gaitBatch(const kw::WalkerSimulator& sim,
 int main(int argc, char** argv) {
   CLI::App app{"Times the Kneed Walker dynamics on a batch of particles."};
   int particles = 5000, frames = 30, repeats = 7;
-  double fps = 30, max_step = kw::SimulationOptions{}.max_step;
+  double fps = 30, max_step = kw::dynamics::SimulationOptions{}.max_step;
   unsigned seed = 1;
   app.add_option("--particles", particles, "walkers in the batch")->check(CLI::Range(1, 1000000));
   app.add_option("--frames", frames, "frames advanced per repeat")->check(CLI::Range(1, 10000));
@@ -57,29 +56,24 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "random seed of the batch");
   CLI11_PARSE(app, argc, argv);
 
-  const kw::WalkerModel person = kw::scaleToPerson(kw::mcGeerProportions(), 1.75, 70);
-  kw::SimulationOptions options;
+  const kw::dynamics::WalkerModel person = kw::dynamics::scaleToPerson(kw::dynamics::mcGeerProportions(), 1.75, 70);
+  kw::dynamics::SimulationOptions options;
   options.max_step = max_step;
-  const kw::WalkerSimulator sim(person, options);
-  kw::WalkerControls controls;
-  controls.ground_slope = kw::kMcGeerSlope;
+  const kw::dynamics::WalkerSimulator sim(person, options);
+  kw::dynamics::WalkerControls controls;
+  controls.ground_slope = kw::optimizer::kMcGeerSlope;
   const double frame_s = 1.0 / fps;
-  const std::vector<kw::WalkerState> initial = gaitBatch(sim, controls, particles, seed);
+  const std::vector<kw::dynamics::WalkerState> initial = gaitBatch(sim, controls, particles, seed);
 
   auto timeRun = [&](int threads) {
-    cv::setNumThreads(threads);
     std::vector<double> per_particle_frame_us;
     for (int r = 0; r < repeats; ++r) {
-      std::vector<kw::WalkerState> batch = initial;
+      std::vector<kw::dynamics::WalkerState> batch = initial;
       for (int f = 0; f < frames; ++f) {
         const auto t0 = std::chrono::steady_clock::now();
-        if (threads == 1) {
-          for (auto& s : batch) sim.advance(controls, s, frame_s);
-        } else {
-          cv::parallel_for_(cv::Range(0, particles), [&](const cv::Range& range) {
-            for (int i = range.start; i < range.end; ++i) sim.advance(controls, batch[i], frame_s);
-          });
-        }
+        kw::common::parallelFor(particles, threads, [&](int begin, int end) {
+          for (int i = begin; i < end; ++i) sim.advance(controls, batch[i], frame_s);
+        });
         const double us =
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
         per_particle_frame_us.push_back(us / particles);
@@ -89,12 +83,12 @@ int main(int argc, char** argv) {
   };
 
   // Accuracy: joint angles after `frames` frames against a 20x finer step.
-  kw::SimulationOptions fine_options = options;
+  kw::dynamics::SimulationOptions fine_options = options;
   fine_options.max_step = max_step / 20;
-  const kw::WalkerSimulator fine(person, fine_options);
+  const kw::dynamics::WalkerSimulator fine(person, fine_options);
   double max_error = 0;
   for (int i = 0; i < std::min(particles, 200); ++i) {
-    kw::WalkerState a = initial[i], b = initial[i];
+    kw::dynamics::WalkerState a = initial[i], b = initial[i];
     for (int f = 0; f < frames; ++f) {
       sim.advance(controls, a, frame_s);
       fine.advance(controls, b, frame_s);
@@ -103,7 +97,7 @@ int main(int argc, char** argv) {
       max_error = std::max(max_error, (a.q - b.q).lpNorm<Eigen::Infinity>());
   }
 
-  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  const int cores = kw::common::resolveThreads(0);
   const double single = timeRun(1);
   const double all = timeRun(cores);
   std::printf("particles=%d frame_s=%.5f frames=%d repeats=%d max_step_natural=%g (%.2f ms)\n",

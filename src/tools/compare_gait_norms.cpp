@@ -20,9 +20,10 @@
 #include <map>
 #include <sstream>
 
-#include "kneed_walker/core/gait_table.h"
+#include "kneed_walker/core/gait/gait_table.h"
+#include "package_files.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 namespace {
 
@@ -67,22 +68,26 @@ std::map<std::string, Norm> readNorms(const std::string& path, const std::string
 }
 
 // The left leg's joint angles (degrees) at a state, in the norms' conventions.
-std::array<double, 3> leftLegAngles(const kw::WalkerState& s, double slope) {
-  const bool stance = s.stance_leg == kw::Leg::kLeft;
-  const double thigh = s.q[stance ? kw::kStanceThigh : kw::kSwingThigh];
-  const double shank = s.q[stance ? kw::kStanceShank : kw::kSwingShank];
-  const double torso_world = s.q[kw::kTorso] + slope;  // from the vertical, CCW
-  return {-torso_world * kDegrees, (thigh - s.q[kw::kTorso]) * kDegrees, (thigh - shank) * kDegrees};
+std::array<double, 3> leftLegAngles(const kw::dynamics::WalkerState& s, double slope) {
+  const bool stance = s.stance_leg == kw::dynamics::Leg::kLeft;
+  const double thigh = s.q[stance ? kw::dynamics::kStanceThigh : kw::dynamics::kSwingThigh];
+  const double shank = s.q[stance ? kw::dynamics::kStanceShank : kw::dynamics::kSwingShank];
+  const double torso_world = s.q[kw::dynamics::kTorso] + slope;  // from the vertical, CCW
+  return {-torso_world * kDegrees, (thigh - s.q[kw::dynamics::kTorso]) * kDegrees, (thigh - shank) * kDegrees};
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Compares a gait's joint angles with the Schwartz 2008 norms."};
-  std::string table_path = "config/gait_table.yaml", norms_path, out = "gait_vs_norms.png";
+  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), norms_path,
+              out = "gait_vs_norms.png";
   std::string speed_class = "Free";
   double speed_kmh = 4.5, step_m = 0.7;
-  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile);
+  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
+  app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
+      ->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--norms", norms_path, "Schwartz2008_Joint_Rotations.csv")->required()->check(CLI::ExistingFile);
   app.add_option("--out", out, "plot to write (PNG)");
   app.add_option("--speed", speed_kmh, "walking speed of the gait, km/h");
@@ -92,23 +97,24 @@ int main(int argc, char** argv) {
 
   try {
     const auto norms = readNorms(norms_path, speed_class);
-    const kw::GaitTable table = kw::loadGaitTable(table_path);
-    const kw::OptimalGait gait = kw::interpolateGait(table, speed_kmh, step_m, 0.0);
-    const kw::WalkerSimulator sim(kw::dimensionlessWalker(kw::BodyProportions{}));
-    if (gait.start.stance_leg != kw::Leg::kLeft) throw std::runtime_error("expected a left stance start");
+    const kw::gait::GaitTable table =
+        kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
+    const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, 0.0);
+    const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
+    if (gait.start.stance_leg != kw::dynamics::Leg::kLeft) throw std::runtime_error("expected a left stance start");
 
     // Two steps from the left heel strike, sampled at the norms' cycle points.
-    kw::WalkerState probe = gait.start;
+    kw::dynamics::WalkerState probe = gait.start;
     double cycle_time = 0;
     for (int step = 0; step < 2; ++step) {
-      const kw::StrideResult stride = sim.stride(gait.controls, probe);
+      const kw::dynamics::StrideResult stride = sim.stride(gait.controls, probe);
       if (!stride.completed) throw std::runtime_error("the gait falls within a cycle");
       cycle_time += stride.duration;
       probe = stride.end;
     }
     const Norm& reference = norms.at(kJoints[0]);
     std::vector<std::array<double, 3>> model(reference.cycle.size());
-    kw::WalkerState s = gait.start;
+    kw::dynamics::WalkerState s = gait.start;
     double t = 0;
     for (size_t i = 0; i < reference.cycle.size(); ++i) {
       const double target = reference.cycle[i] * cycle_time;

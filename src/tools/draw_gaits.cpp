@@ -10,17 +10,21 @@
 #include <cmath>
 #include <cstdio>
 
-#include "kneed_walker/core/gait_table.h"
-#include "kneed_walker/core/walker_drawing.h"
+#include "kneed_walker/core/gait/gait_table.h"
+#include "kneed_walker/core/dynamics/walker_drawing.h"
+#include "package_files.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 int main(int argc, char** argv) {
   CLI::App app{"Draws optimal gaits uphill, level and downhill (the paper's Fig. 2)."};
-  std::string table_path = "config/gait_table.yaml", out = "optimal_gaits.png";
+  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), out = "optimal_gaits.png";
   double speed_kmh = 4.5, step_m = 0.7;
   int snapshots = 8, width = 1200;
-  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile);
+  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
+  app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
+      ->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--out", out, "PNG to write");
   app.add_option("--speed", speed_kmh, "walking speed, km/h");
   app.add_option("--step", step_m, "step length, m");
@@ -29,8 +33,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const kw::GaitTable table = kw::loadGaitTable(table_path);
-    const kw::WalkerSimulator sim(kw::dimensionlessWalker(kw::BodyProportions{}));
+    const kw::gait::GaitTable table =
+        kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
+    const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
     const double slope = table.grid.slopes_rad.back();
     const double slopes[3] = {slope, 0.0, -slope};
     const char* names[3] = {"uphill", "level", "downhill"};
@@ -38,14 +43,14 @@ int main(int argc, char** argv) {
     const int row_height = static_cast<int>(pixels_per_leg * 2.2);
     cv::Mat figure(3 * row_height, width, CV_8UC3, cv::Scalar(255, 255, 255));
     for (int row = 0; row < 3; ++row) {
-      const kw::OptimalGait gait = kw::interpolateGait(table, speed_kmh, step_m, slopes[row]);
-      kw::SideView view;
+      const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slopes[row]);
+      kw::dynamics::SideView view;
       view.ground_slope = slopes[row];
       view.pixels_per_unit = pixels_per_leg;
       view.origin_px = {40 + 0.6 * pixels_per_leg, (row + 1) * row_height - 0.25 * pixels_per_leg};
-      kw::drawGround(figure, view);
-      const kw::StrideResult stride = sim.stride(gait.controls, gait.start);
-      kw::drawStrip(figure, sim, gait.controls, gait.start, stride.duration, snapshots, view);
+      kw::dynamics::drawGround(figure, view);
+      const kw::dynamics::StrideResult stride = sim.stride(gait.controls, gait.start);
+      kw::dynamics::drawStrip(figure, sim, gait.controls, gait.start, stride.duration, snapshots, view);
       cv::putText(figure,
                   cv::format("%s %.1f deg: %.1f km/h, %.2f m steps (1.75 m person); stride %s",
                              names[row], slopes[row] * 180 / M_PI, speed_kmh, step_m,

@@ -12,10 +12,10 @@
 
 #include <cstdio>
 
-#include "kneed_walker/core/periodic_gait.h"
-#include "kneed_walker/core/walker_drawing.h"
+#include "kneed_walker/core/optimizer/periodic_gait.h"
+#include "kneed_walker/core/dynamics/walker_drawing.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 int main(int argc, char** argv) {
   CLI::App app{"Draws the Kneed Walker walking: a PNG strip and optionally an animation."};
@@ -32,26 +32,26 @@ int main(int argc, char** argv) {
   app.add_option("--mass", mass_kg, "person's mass, kg")->check(CLI::Range(20.0, 250.0));
   CLI11_PARSE(app, argc, argv);
 
-  const kw::WalkerSimulator sim(kw::scaleToPerson(kw::mcGeerProportions(), height_m, mass_kg));
-  kw::WalkerControls controls;
-  controls.ground_slope = kw::kMcGeerSlope;
-  const kw::PeriodicGait gait = kw::mcGeerPassiveGait();
+  const kw::dynamics::WalkerSimulator sim(kw::dynamics::scaleToPerson(kw::dynamics::mcGeerProportions(), height_m, mass_kg));
+  kw::dynamics::WalkerControls controls;
+  controls.ground_slope = kw::optimizer::kMcGeerSlope;
+  const kw::optimizer::PeriodicGait gait = kw::optimizer::mcGeerPassiveGait();
   if (!gait.converged) {
     std::fprintf(stderr, "draw_walker: the passive gait was not found (residual %g)\n", gait.residual);
     return 1;
   }
-  const kw::WalkerState start = kw::fromDimensionless(gait.start, sim);
+  const kw::dynamics::WalkerState start = kw::optimizer::fromDimensionless(gait.start, sim);
   const double stride_s = gait.stride.duration * sim.naturalTime();
   const double total_s = strides * stride_s;
   const double distance = strides * gait.stride.step_length * sim.model().legLength();
 
-  kw::SideView view;
+  kw::dynamics::SideView view;
   view.ground_slope = controls.ground_slope;
   view.pixels_per_unit = (width - 80) / (distance + 1.0);
   const int image_height = static_cast<int>(view.pixels_per_unit * (height_m + 0.4)) + 40;
   view.origin_px = {40 + 0.5 * view.pixels_per_unit, image_height - 20.0};
   cv::Mat strip(image_height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-  kw::drawGround(strip, view);
+  kw::dynamics::drawGround(strip, view);
 
   cv::VideoWriter writer;
   if (!video.empty()) {
@@ -62,13 +62,13 @@ int main(int argc, char** argv) {
     }
   }
 
-  const kw::WalkerState end = kw::drawStrip(strip, sim, controls, start, total_s, snapshots, view);
+  const kw::dynamics::WalkerState end = kw::dynamics::drawStrip(strip, sim, controls, start, total_s, snapshots, view);
   if (writer.isOpened()) {
-    kw::WalkerState state = start;
+    kw::dynamics::WalkerState state = start;
     for (int f = 0; f <= static_cast<int>(total_s * fps) && !state.fallen; ++f) {
       cv::Mat frame(strip.size(), CV_8UC3, cv::Scalar(255, 255, 255));
-      kw::drawGround(frame, view);
-      kw::drawWalker(frame, sim, state, view);
+      kw::dynamics::drawGround(frame, view);
+      kw::dynamics::drawWalker(frame, sim, state, view);
       cv::putText(frame, cv::format("t = %.2f s", static_cast<double>(f) / fps), {20, 30},
                   cv::FONT_HERSHEY_SIMPLEX, 0.8, {0, 0, 0}, 2, cv::LINE_AA);
       writer.write(frame);

@@ -24,16 +24,18 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
-#include <thread>
 
-#include "kneed_walker/core/gait_table.h"
+#include "kneed_walker/core/common/parallel.h"
+#include "kneed_walker/core/gait/gait_table.h"
+#include "kneed_walker/core/optimizer/optimal_gaits.h"
+#include "package_files.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 namespace {
 
 // Grid neighbours (Chebyshev distance 1) of a point.
-std::vector<int> neighbours(const kw::GaitGrid& grid, int index) {
+std::vector<int> neighbours(const kw::gait::GaitGrid& grid, int index) {
   const auto c = grid.cell(index);
   const int n[3] = {static_cast<int>(grid.speeds_kmh.size()),
                     static_cast<int>(grid.step_lengths_m.size()),
@@ -49,16 +51,16 @@ std::vector<int> neighbours(const kw::GaitGrid& grid, int index) {
   return result;
 }
 
-double gridDistance(const kw::GaitGrid& grid, int a, int b) {
+double gridDistance(const kw::gait::GaitGrid& grid, int a, int b) {
   const auto ca = grid.cell(a), cb = grid.cell(b);
   double d = 0;
   for (int i = 0; i < 3; ++i) d += (ca[i] - cb[i]) * (ca[i] - cb[i]);
   return std::sqrt(d);
 }
 
-void writeAtomically(const std::string& path, const kw::GaitTable& table) {
+void writeAtomically(const std::string& path, const kw::gait::GaitTable& table) {
   const std::string tmp = path + ".tmp.yaml";
-  kw::saveGaitTable(tmp, table);
+  kw::gait::saveGaitTable(tmp, table);
   std::filesystem::rename(tmp, path);
 }
 
@@ -94,13 +96,23 @@ int main(int argc, char** argv) {
   app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h");
   app.add_option("--seed-step", seed_step, "seed grid point: step length, m");
   app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad");
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
+  app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
+      ->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  threads = kw::common::resolveThreads(threads);
+  kw::dynamics::BodyProportions proportions;
+  try {
+    proportions = kw::dynamics::loadBodyProportions(walker_model);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "optimize_gaits: %s\n", e.what());
+    return 1;
+  }
 
   if (!merge_table.empty()) {
     try {
-      kw::GaitTable table = kw::loadGaitTable(out);
-      const int taken = kw::keepLowerEffort(table, kw::loadGaitTable(merge_table));
+      kw::gait::GaitTable table = kw::gait::loadGaitTable(out, proportions);
+      const int taken = kw::gait::keepLowerEffort(table, kw::gait::loadGaitTable(merge_table, proportions));
       writeAtomically(out, table);
       int feasible = 0;
       for (const auto& e : table.entries) feasible += e.feasible;
@@ -113,21 +125,22 @@ int main(int argc, char** argv) {
     }
   }
 
-  const kw::BodyProportions proportions;
-  kw::GaitOptimizerOptions options;
-  kw::GaitTable table;
+  kw::optimizer::GaitOptimizerOptions options;
+  kw::gait::GaitTable table;
   if (resume && std::filesystem::exists(out)) {
-    table = kw::loadGaitTable(out);
+    table = kw::gait::loadGaitTable(out, proportions);
     if (retry_failed)
       for (auto& e : table.entries)
         if (e.solved && !e.feasible) e.solved = false;
   } else {
-    table.grid = kw::GaitGrid::paper();
+    table.grid = kw::gait::GaitGrid::paper();
+    table.grid.leg_length_per_height = proportions.leg_length_per_height;
+    table.body = proportions;
     table.entries.resize(table.grid.size());
-    table.fixed.enabled = prior_fixed;
+    if (prior_fixed) table.fixed = kw::gait::FixedControls{};
   }
   options.fixed = table.fixed;
-  const kw::GaitGrid& grid = table.grid;
+  const kw::gait::GaitGrid& grid = table.grid;
   const auto start_time = std::chrono::steady_clock::now();
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
@@ -146,21 +159,21 @@ int main(int argc, char** argv) {
     }
   }
   const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
-                                        [](const kw::GaitTableEntry& e) { return e.feasible; });
+                                        [](const kw::gait::GaitTableEntry& e) { return e.feasible; });
   if (!any_feasible) {
-    kw::OptimalGait gait;
+    kw::optimizer::OptimalGait gait;
     if (seed_table.empty()) {
       std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
-      gait = kw::seedGait(proportions, grid.target(seed), options);
+      gait = kw::optimizer::seedGait(proportions, grid.target(seed), options);
     } else {
       std::fprintf(stderr, "optimize_gaits: seeding from %s's gait at the seed point...\n", seed_table.c_str());
-      const kw::GaitTable from = kw::loadGaitTable(seed_table);
+      const kw::gait::GaitTable from = kw::gait::loadGaitTable(seed_table, proportions);
       const auto c = grid.cell(seed);
-      const kw::OptimalGait warm =
-          kw::interpolateGait(from, grid.speeds_kmh[c[0]], grid.step_lengths_m[c[1]], grid.slopes_rad[c[2]]);
-      gait = kw::optimizeGait(proportions, grid.target(seed), warm, options);
+      const kw::gait::Gait warm =
+          kw::gait::interpolateGait(from, grid.speeds_kmh[c[0]], grid.step_lengths_m[c[1]], grid.slopes_rad[c[2]]);
+      gait = kw::optimizer::optimizeGait(proportions, grid.target(seed), warm, options);
     }
-    table.entries[seed] = {true, gait.feasible(), gait};
+    table.entries[seed] = kw::optimizer::tableEntry(gait);
     writeAtomically(out, table);
     if (!gait.feasible()) {
       std::fprintf(stderr, "optimize_gaits: the seed gait did not converge (residual %g)\n",
@@ -222,17 +235,17 @@ int main(int argc, char** argv) {
       std::sort(starts.begin(), starts.end(), [&](int a, int b) {
         return gridDistance(grid, a, point) < gridDistance(grid, b, point);
       });
-      std::vector<kw::OptimalGait> warm;
+      std::vector<kw::gait::Gait> warm;
       for (int n : starts) warm.push_back(table.entries[n].gait);
       lock.unlock();
 
       // Warm starts from the nearest solved neighbours; the least effort among feasible ones.
-      const kw::GaitTarget target = grid.target(point);
-      kw::OptimalGait best;
+      const kw::gait::GaitTarget target = grid.target(point);
+      kw::optimizer::OptimalGait best;
       bool found = false;
       int evaluations = 0;
       for (size_t a = 0; a < warm.size() && static_cast<int>(a) < max_attempts; ++a) {
-        const kw::OptimalGait gait = kw::optimizeGait(proportions, target, warm[a], options);
+        const kw::optimizer::OptimalGait gait = kw::optimizer::optimizeGait(proportions, target, warm[a], options);
         evaluations += gait.evaluations;
         if (gait.feasible() && (!found || gait.effort < best.effort)) {
           best = gait;
@@ -244,14 +257,14 @@ int main(int argc, char** argv) {
       }
       // Failing that, continue from the nearest neighbour through the midpoint target.
       if (!found && !warm.empty()) {
-        const kw::GaitTarget& from = warm.front().target;
-        const kw::GaitTarget middle{0.5 * (from.speed + target.speed),
+        const kw::gait::GaitTarget& from = warm.front().target;
+        const kw::gait::GaitTarget middle{0.5 * (from.speed + target.speed),
                                     0.5 * (from.step_length + target.step_length),
                                     0.5 * (from.slope + target.slope)};
-        const kw::OptimalGait half = kw::optimizeGait(proportions, middle, warm.front(), options);
+        const kw::optimizer::OptimalGait half = kw::optimizer::optimizeGait(proportions, middle, warm.front(), options);
         evaluations += half.evaluations;
         if (half.feasible()) {
-          const kw::OptimalGait gait = kw::optimizeGait(proportions, target, half, options);
+          const kw::optimizer::OptimalGait gait = kw::optimizer::optimizeGait(proportions, target, half, options);
           evaluations += gait.evaluations;
           if (gait.feasible()) {
             best = gait;
@@ -262,7 +275,7 @@ int main(int argc, char** argv) {
       best.evaluations = evaluations;
 
       lock.lock();
-      table.entries[point] = {true, found, best};
+      table.entries[point] = kw::optimizer::tableEntry(best);
       in_progress[point] = false;
       --running;
       writeAtomically(out, table);
@@ -272,9 +285,10 @@ int main(int argc, char** argv) {
   };
 
   progress();
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+  // `threads` workers take points from the shared schedule until none is left.
+  kw::common::parallelFor(threads, threads, [&](int begin, int end) {
+    for (int w = begin; w < end; ++w) worker();
+  }, 1);
 
   int feasible = 0, unreached = 0;
   for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;

@@ -12,19 +12,24 @@
 #include <cmath>
 #include <cstdio>
 
-#include "kneed_walker/core/gait_table.h"
-#include "kneed_walker/core/walker_prior.h"
+#include "kneed_walker/core/gait/gait_table.h"
+#include "kneed_walker/core/prior/walker_prior.h"
+#include "package_files.h"
 
-namespace kw = kneed_walker;
+namespace kw = kneed_walker::core;
 
 int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
-  std::string table_path = "config/prior_gait_table.yaml", prior_path = "config/prior.yaml";
+  std::string table_path = kneed_walker::tools::packageFile("config/prior_gait_table.yaml");
+  std::string prior_path = kneed_walker::tools::packageFile("config/prior.yaml");
   double speed_kmh = 4.5, step_m = 0.7, slope = 0.0, fps = 30, noise_scale = 1.0;
   int strides = 1000, chain = 1;
   unsigned seed = 1;
-  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile);
-  app.add_option("--prior", prior_path, "prior parameters (YAML)")->check(CLI::ExistingFile);
+  app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--prior", prior_path, "prior parameters (YAML)")->check(CLI::ExistingFile)->capture_default_str();
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
+  app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
+      ->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--speed", speed_kmh, "gait speed, km/h");
   app.add_option("--step", step_m, "gait step length, m");
   app.add_option("--slope", slope, "ground slope, rad");
@@ -35,17 +40,18 @@ int main(int argc, char** argv) {
   app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(CLI::Range(0.0, 100.0));
   CLI11_PARSE(app, argc, argv);
   try {
-    const kw::GaitTable table = kw::loadGaitTable(table_path);
-    const kw::WalkerSimulator sim(kw::dimensionlessWalker(kw::BodyProportions{}));
-    kw::OptimalGait gait = kw::interpolateGait(table, speed_kmh, step_m, slope);
-    gait.stride = sim.stride(gait.controls, gait.start);
-    kw::PriorOptions options = kw::loadPriorOptions(prior_path);
-    kw::requirePriorTable(table, options);
+    const kw::gait::GaitTable table =
+        kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
+    const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
+    kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slope);
+    gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
+    kw::prior::PriorOptions options = kw::prior::loadPriorOptions(prior_path);
+    kw::prior::requirePriorTable(table, options);
     for (double& s : options.noise_scale) s *= noise_scale;
-    const kw::WalkerPrior prior(sim, gait, options);
-    kw::Random random(seed);
+    const kw::prior::WalkerPrior prior(sim, gait, options);
+    kw::common::Random random(seed);
     const double dt = (1.0 / fps) / std::sqrt(table.grid.referenceLegLength() / table.grid.gravity);
-    const kw::WalkingFraction count = kw::sampleStrides(prior, strides, chain, dt, random);
+    const kw::prior::WalkingFraction count = kw::prior::sampleStrides(prior, strides, chain, dt, random);
     std::printf("gait %.1f km/h, %.2f m, slope %.3f rad; %d strides in chains of %d at %.0f fps, noise x%g, seed %u\n",
                 speed_kmh, step_m, slope, count.walked + count.fell, chain, fps, noise_scale, seed);
     std::printf("walking_fraction=%.4f (%d strides ended in a heel strike, %d in a fall)\n",

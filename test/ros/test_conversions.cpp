@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 namespace {
 
 // A consistent 4x3 bgr8 frame with a calibrated camera.
@@ -75,7 +75,7 @@ TEST(CameraConversion, RoundTripKeepsProjection) {
           .toRotationMatrix();
   for (const std::vector<double>& d : {std::vector<double>{-0.15, 0.05, 0.001, 0.004, 0.0},
                                        std::vector<double>{-0.2, 0.05, 0.001, -0.002, 0.01, 0.02, -0.01, 0.003}}) {
-    const Camera camera(k, d, r, Eigen::Vector3d(1.9, -2.4, 34.4), 768, 576);
+    const core::vision::Camera camera(k, d, r, Eigen::Vector3d(1.9, -2.4, 34.4), 768, 576);
     const sensor_msgs::CameraInfo info = toCameraInfo(camera, "camera_optical");
     EXPECT_EQ(info.distortion_model, d.size() == 8 ? "rational_polynomial" : "plumb_bob");
     EXPECT_EQ(info.header.frame_id, "camera_optical");
@@ -84,7 +84,7 @@ TEST(CameraConversion, RoundTripKeepsProjection) {
     const geometry_msgs::TransformStamped pose = cameraPose(camera, "world", "camera_optical");
     EXPECT_EQ(pose.header.frame_id, "world");
     EXPECT_EQ(pose.child_frame_id, "camera_optical");
-    const Camera back = toCamera(info, pose);
+    const core::vision::Camera back = toCamera(info, pose);
     for (const Eigen::Vector3d& point : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, -2, 1.5),
                                          Eigen::Vector3d(-4, 5, 0.2)}) {
       const auto a = camera.project(point), b = back.project(point);
@@ -102,4 +102,4 @@ TEST(CameraConversion, NonUnitQuaternionIsRefused) {
 }
 
 }  // namespace
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "kneed_walker/core/synthetic_scene.h"
+#include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/ros/conversions.h"
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 namespace {
 
 namespace fs = std::filesystem;
@@ -124,10 +124,10 @@ TEST(SyntheticSequences, AreCompleteAndConsistent) {
       ASSERT_TRUE(s.images[i] && s.infos[i]) << "frame " << i << " is not an Image and a CameraInfo";
       EXPECT_EQ(frameProblem(*s.images[i], *s.infos[i]), "");
       EXPECT_NEAR(s.images[i]->header.stamp.toSec(), s.stamps[i], 1e-5);
-      ASSERT_EQ(s.joints[i].size(), static_cast<size_t>(kNumBodyJoints));
+      ASSERT_EQ(s.joints[i].size(), static_cast<size_t>(core::body::kNumBodyJoints));
     }
-    const Camera file_camera = Camera::load(kSequences + "/" + name + "_camera.yml", 0.001);
-    const Camera bag_camera = toCamera(*s.infos.front(), s.tf_static.front()->transforms.front());
+    const core::vision::Camera file_camera = core::vision::Camera::load(kSequences + "/" + name + "_camera.yml", 0.001);
+    const core::vision::Camera bag_camera = toCamera(*s.infos.front(), s.tf_static.front()->transforms.front());
     for (const auto& [joint, position] : s.joints.front()) {
       const auto a = file_camera.project(position), b = bag_camera.project(position);
       ASSERT_TRUE(a && b) << joint;
@@ -157,8 +157,8 @@ TEST(SyntheticSequences, ShowWhatTheyAreMeantTo) {
 
   // Occluded: the waist's pixel shows the shirt at the start and the board in the middle.
   const Sequence occluded = readSequence(kSequences + "/occluded");
-  const Camera camera = Camera::load(kSequences + "/occluded_camera.yml", 0.001);
-  const PersonAppearance look;
+  const core::vision::Camera camera = core::vision::Camera::load(kSequences + "/occluded_camera.yml", 0.001);
+  const core::synthetic::PersonAppearance look;
   auto shirt_at_waist = [&](size_t frame) {
     const Eigen::Vector3d torso = 0.5 * (occluded.joints[frame].at("waist") + occluded.joints[frame].at("neck"));
     const Eigen::Vector2d p = *camera.project(torso);
@@ -171,4 +171,4 @@ TEST(SyntheticSequences, ShowWhatTheyAreMeantTo) {
 }
 
 }  // namespace
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

@@ -15,7 +15,7 @@
 #include "kneed_walker/TrackingStatus.h"
 #include "kneed_walker/ros/parameters.h"
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 namespace {
 
 // Spins until pred() holds or timeout_s passes; returns pred().
@@ -165,7 +165,7 @@ TEST(TrackerNodelet, ManagerRefusesNodeletWithBadParameters) {
 }
 
 }  // namespace
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue
 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);

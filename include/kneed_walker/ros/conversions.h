@@ -8,9 +8,9 @@
 
 #include <string>
 
-#include "kneed_walker/core/camera.h"
+#include "kneed_walker/core/vision/camera.h"
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 
 // Why an image + camera_info pair cannot be tracked on, or an empty string when it can:
 // empty or inconsistent image buffers, unsupported encodings, camera_info of another size,
@@ -20,15 +20,15 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
 
 // The intrinsics of a core camera as a CameraInfo (plumb_bob for up to 5 distortion
 // coefficients, rational_polynomial for 8; R identity; P = [K | 0], a monocular camera).
-sensor_msgs::CameraInfo toCameraInfo(const Camera& camera, const std::string& frame_id);
+sensor_msgs::CameraInfo toCameraInfo(const core::vision::Camera& camera, const std::string& frame_id);
 
 // The camera's pose in the world: the transform from `world_frame` to the camera's optical
 // frame (REP 103 `_optical`: z forward, x right, y down), as tf2 publishes it.
-geometry_msgs::TransformStamped cameraPose(const Camera& camera, const std::string& world_frame,
+geometry_msgs::TransformStamped cameraPose(const core::vision::Camera& camera, const std::string& world_frame,
                                            const std::string& camera_frame);
 
 // A core camera from CameraInfo intrinsics and the camera's pose in the world (the inverse of
 // the two above). Throws std::invalid_argument naming what is wrong.
-Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::TransformStamped& pose);
+core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::TransformStamped& pose);
 
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

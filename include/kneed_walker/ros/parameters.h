@@ -10,9 +10,9 @@
 
 #include <string>
 
-#include "kneed_walker/core/tracker_options.h"
+#include "kneed_walker/core/tracking/tracker_options.h"
 
-namespace kneed_walker {
+namespace kneed_walker::ros_glue {
 
 // Options of the ROS wrapper itself (not of the tracking algorithm).
 struct RosInterfaceOptions {
@@ -24,7 +24,7 @@ struct RosInterfaceOptions {
 };
 
 struct TrackerNodeConfig {
-  TrackerOptions tracker;
+  core::tracking::TrackerOptions tracker;
   RosInterfaceOptions ros;
 };
 
@@ -32,4 +32,4 @@ struct TrackerNodeConfig {
 // every problem (one per line) when any is found.
 TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh);
 
-}  // namespace kneed_walker
+}  // namespace kneed_walker::ros_glue

@@ -1,0 +1,68 @@
+// A periodic gait in the form the runtime uses (paper §3.3–3.4): the controls and the start of
+// one periodic stride, which the prior walks around. The optimiser (optimizer/optimal_gaits.h)
+// makes them; the gait table (gait_table.h) stores and interpolates them. Dimensionless units:
+// leg length 1, body mass 1, g 1, time √(L/g).
+#pragma once
+
+#include <array>
+
+#include "kneed_walker/core/dynamics/walker_simulation.h"
+
+namespace kneed_walker::core::gait {
+
+// What a gait must achieve: speed v/√(gL), step length ℓ/L, slope γ (rad, positive uphill).
+struct GaitTarget {
+  double speed = 0;
+  double step_length = 0;
+  double slope = 0;
+};
+
+struct Gait {
+  GaitTarget target;
+  dynamics::WalkerControls controls;  // θ, ι and γ (no torque offsets)
+  dynamics::WalkerState start;        // post-heel-strike state x0 of the periodic stride
+  double stride_duration = 0;         // of the periodic stride, natural time units
+};
+
+// The controls that the prior holds fixed (paper §3.4): knee dampings dK1 = dK2, the swing
+// knee's stiffness κK2 (its rest angle is then irrelevant: held at 0), the torso's rest angle
+// φ⁰To = torso_rest_per_slope × γ and its damping dTo. Gaits optimised with them held are the
+// ones the prior can follow (config/prior_gait_table.yaml).
+struct FixedControls {
+  double knee_damping = 0.05;
+  double swing_knee_stiffness = 0.0;
+  double torso_rest_per_slope = 1.0 / 3;
+  double torso_damping = 1.5;
+  bool operator==(const FixedControls& other) const;
+  bool operator!=(const FixedControls& other) const { return !(*this == other); }
+};
+
+// The spring parameters θ (eqs. 1–3) and the toe-off impulse ι as one flat vector, in the one
+// order that the gait table files and the optimiser's variables use.
+enum Control : int {
+  kStanceKneeStiffness = 0,
+  kStanceKneeDamping,
+  kSwingKneeStiffness,
+  kSwingKneeRestAngle,
+  kSwingKneeDamping,
+  kHipStiffness,
+  kTorsoStiffness,
+  kTorsoRestAngle,
+  kTorsoDamping,
+  kToeOffImpulse,
+  kNumControls
+};
+using ControlVector = std::array<double, kNumControls>;
+const char* controlName(Control control);  // "stance_knee_stiffness", ...
+ControlVector toControlVector(const dynamics::WalkerControls& controls);
+// Controls from the vector, on a slope γ, with no torque offsets.
+dynamics::WalkerControls fromControlVector(const ControlVector& vector, double slope);
+
+// Whether a control is one of the fixed ones (set by withFixedControls).
+bool isFixed(Control control);
+
+// The controls with the fixed ones held at their values for the gait's slope.
+dynamics::WalkerControls withFixedControls(dynamics::WalkerControls controls,
+                                           const FixedControls& fixed);
+
+}  // namespace kneed_walker::core::gait

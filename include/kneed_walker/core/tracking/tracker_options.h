@@ -1,0 +1,40 @@
+// Options of the tracker (paper §4 and §5), one plain struct validated in one place.
+//
+// The nodelet fills this from its private ROS parameters, the offline tools from their
+// command lines; both refuse to start when validate() reports a problem. Defaults are the
+// paper's settings where the paper gives them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace kneed_walker::core::tracking {
+
+struct TrackerOptions {
+  // Particle filter (paper §4, "Inference"; §5 uses 5000 particles, threshold 500).
+  int num_particles = 5000;               // N, count, [1, 1000000]
+  double resample_ess_threshold = 500.0;  // resample when N_eff falls below this, (0, N]
+  int resample_lag_frames = 3;            // Δs: resample from time t − Δs, frames, [0, 30]
+  double resample_mixing = 0.95;          // π: weight of the time-t multinomial, [0, 1]
+
+  // Execution.
+  int num_threads = 0;        // worker threads for the per-particle work; 0 = all cores
+  std::uint64_t seed = 1;     // random seed: the same input and seed give the same output
+
+  // Person and scene priors (paper §5: "initial state specified coarsely").
+  double person_height_m = 1.75;  // standing height H, m, [1.0, 2.3]
+  double person_mass_kg = 70.0;   // body mass M, kg, [20, 250]
+  double ground_slope_rad = 0.0;  // γ, rad, |γ| ≤ 0.2 (≈ 11.5°); positive = uphill
+
+  // Frames whose stamp gap is not usable (first frame, equal or backwards stamps) are
+  // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
+  double default_frame_interval_s = 0.1;  // s, (0, 1]
+  double max_frame_gap_s = 1.0;           // s, > default_frame_interval_s
+};
+
+// Every problem with the options, each naming the field and the allowed range; empty when
+// the options are usable.
+std::vector<std::string> validate(const TrackerOptions& options);
+
+}  // namespace kneed_walker::core::tracking

@@ -1,0 +1,38 @@
+// The body's parts (tapered elliptical cylinders of BodyShape, paper §4) placed on a BodyPose
+// and projected into the image as convex outlines, one polygon per part: the image regions the
+// likelihood reads.
+//
+// Each part runs from a proximal to a distal centre point; its width axis lies across the
+// body (along BodyPose::left, made square to the part) and its depth axis square to both.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+
+#include "kneed_walker/core/body/body_model.h"
+#include "kneed_walker/core/vision/camera.h"
+
+namespace kneed_walker::core::vision {
+
+// The proximal and distal centre points of every part in the world, metres.
+struct PartAxes {
+  std::array<Eigen::Vector3d, body::kNumBodyParts> proximal, distal;
+};
+PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape);
+
+// A part's outline in the image: the convex hull of its two end ellipses, sampled at
+// kOutlineSamples points each. `visible` is false when any point is behind the camera.
+constexpr int kOutlineSamples = 8;
+struct PartOutline {
+  std::array<Eigen::Vector2d, 2 * kOutlineSamples> hull;  // first `size` points, in order
+  int size = 0;
+  bool visible = false;
+};
+using BodyOutlines = std::array<PartOutline, body::kNumBodyParts>;
+
+// Projects all parts; no allocation (fixed-size arrays), for the per-particle path.
+void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
+                      BodyOutlines& outlines);
+
+}  // namespace kneed_walker::core::vision

@@ -1,0 +1,68 @@
+// A calibrated static camera (paper §4–5: "roughly calibrated camera and ground plane"):
+// OpenCV's pinhole model with lens distortion and the world → camera transform.
+//
+// World frame (REP 103): metres, right-handed, Z up, the ground plane Z = 0, as in
+// ../shared/data/pets2009/View_001_camera.yml. Camera frame: OpenCV's (and REP 103's
+// `_optical`): z forward, x right, y down. A world point X maps to the camera as R X + t.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace kneed_walker::core::vision {
+
+class Camera {
+ public:
+  // distortion: OpenCV's order (k1, k2, p1, p2[, k3[, k4, k5, k6]]): 0, 4, 5 or 8 values.
+  // translation in metres. Throws std::invalid_argument naming a bad argument.
+  Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& distortion,
+         const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation_m, int width_px,
+         int height_px);
+
+  // Reads OpenCV FileStorage YAML with camera_matrix, distortion_coefficients, R, t,
+  // image_width, image_height; t is in `file_length_unit_m` metres per file unit (0.001 for
+  // the PETS calibration, which is in mm).
+  static Camera load(const std::string& path, double file_length_unit_m);
+  // Writes the same format (t in file units of file_length_unit_m metres); load reads it back.
+  void save(const std::string& path, double file_length_unit_m) const;
+  // The same keys into an open file, beside the caller's own.
+  void write(cv::FileStorage& file, double file_length_unit_m) const;
+
+  // Pixel of a world point (metres), distortion applied; nullopt behind the camera (z ≤ 1 cm).
+  // Written out rather than calling cv::projectPoints: it is called per body part per
+  // particle, and agrees with cv::projectPoints to 1e-6 px (test_camera).
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& world_m) const;
+
+  // The viewing rays of pixels: world-frame directions (not normalised) from centre(),
+  // distortion undone. One call undistorts all pixels at once.
+  std::vector<Eigen::Vector3d> rays(const std::vector<Eigen::Vector2d>& pixels) const;
+
+  // The world point on the ground plane Z = ground_height_m seen at a pixel; nullopt when the
+  // ray misses the ground (points at or above the horizon).
+  std::optional<Eigen::Vector3d> groundPoint(const Eigen::Vector2d& pixel,
+                                             double ground_height_m = 0.0) const;
+
+  // The camera centre in the world, metres.
+  Eigen::Vector3d centre() const { return -rotation_.transpose() * translation_; }
+  const Eigen::Matrix3d& intrinsics() const { return k_; }
+  const std::vector<double>& distortion() const { return distortion_; }
+  const Eigen::Matrix3d& rotation() const { return rotation_; }
+  const Eigen::Vector3d& translation() const { return translation_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  Eigen::Matrix3d k_;
+  std::vector<double> distortion_;
+  double k1_ = 0, k2_ = 0, p1_ = 0, p2_ = 0, k3_ = 0, k4_ = 0, k5_ = 0, k6_ = 0;
+  Eigen::Matrix3d rotation_;
+  Eigen::Vector3d translation_;
+  int width_, height_;
+};
+
+}  // namespace kneed_walker::core::vision

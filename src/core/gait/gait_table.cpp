@@ -1,0 +1,262 @@
+#include "kneed_walker/core/gait/gait_table.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "kneed_walker/core/common/config_file.h"
+
+namespace kneed_walker::core::gait {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<double> linspace(double from, double to, int n) {
+  std::vector<double> v(n);
+  for (int i = 0; i < n; ++i) v[i] = from + (to - from) * i / (n - 1);
+  return v;
+}
+
+std::vector<double> toVector(const dynamics::Vector5& v) { return {v.data(), v.data() + v.size()}; }
+
+void requireAscending(common::ConfigNode& file, const std::string& key, std::vector<double>& axis) {
+  if (!file.read(key, axis, common::Need::kRequired)) return;
+  if (axis.size() < 2 || !std::is_sorted(axis.begin(), axis.end()) ||
+      std::adjacent_find(axis.begin(), axis.end()) != axis.end())
+    file.problem(key, "must hold at least two ascending values");
+}
+
+// Where x falls on an axis: the lower index and the weight of the upper neighbour.
+std::pair<int, double> locate(const std::vector<double>& axis, double x, const char* name,
+                              const char* unit) {
+  if (!(x >= axis.front() && x <= axis.back())) {
+    std::ostringstream message;
+    message << name << " " << x << " " << unit << " is outside the gait table's range "
+            << axis.front() << "–" << axis.back() << " " << unit;
+    throw std::out_of_range(message.str());
+  }
+  const int last = static_cast<int>(axis.size()) - 2;
+  int i = static_cast<int>(std::upper_bound(axis.begin(), axis.end(), x) - axis.begin()) - 1;
+  i = std::clamp(i, 0, last);
+  return {i, (x - axis[i]) / (axis[i + 1] - axis[i])};
+}
+
+}  // namespace
+
+GaitGrid GaitGrid::paper() {
+  GaitGrid grid;
+  grid.speeds_kmh = linspace(3.0, 7.0, 9);
+  grid.step_lengths_m = linspace(0.5, 1.0, 6);
+  grid.slopes_rad = linspace(-4.3 * kPi / 180, 4.3 * kPi / 180, 5);
+  return grid;
+}
+
+std::array<int, 3> GaitGrid::cell(int index) const {
+  const int n_slope = static_cast<int>(slopes_rad.size());
+  const int n_step = static_cast<int>(step_lengths_m.size());
+  return {index / (n_step * n_slope), (index / n_slope) % n_step, index % n_slope};
+}
+
+gait::GaitTarget GaitGrid::target(double speed_kmh, double step_length_m, double slope_rad) const {
+  const double leg = referenceLegLength();
+  return {speed_kmh / 3.6 / std::sqrt(gravity * leg), step_length_m / leg, slope_rad};
+}
+
+gait::GaitTarget GaitGrid::target(int index) const {
+  const auto c = cell(index);
+  return target(speeds_kmh[c[0]], step_lengths_m[c[1]], slopes_rad[c[2]]);
+}
+
+void saveGaitTable(const std::string& path, const GaitTable& table) {
+  const GaitGrid& g = table.grid;
+  if (g.leg_length_per_height != table.body.leg_length_per_height)
+    throw std::invalid_argument(path + ": the grid's leg_length_per_height differs from the body model's");
+  cv::FileStorage file(path, cv::FileStorage::WRITE);
+  if (!file.isOpened()) throw std::invalid_argument(path + ": cannot write");
+  std::string controls = "controls:";
+  for (int c = 0; c < kNumControls; ++c)
+    controls += std::string(c % 4 == 0 ? "\n  " : " ") + controlName(static_cast<Control>(c)) +
+                (c + 1 < kNumControls ? "," : ".");
+  file.writeComment(
+      "Optimal cyclic gaits of the Kneed Walker (paper 3.3), written by\n"
+      "`rosrun kneed_walker optimize_gaits`. Dimensionless units: leg length 1, body mass 1,\n"
+      "g 1; the axes are for a person of reference_height_m with the body model below.\n" +
+      controls + "\nq, qdot: post-heel-strike state x0.");
+  file << "reference_height_m" << g.reference_height_m;
+  file << "gravity" << g.gravity;
+  file << "body_model" << "{";
+  dynamics::writeBodyProportions(file, table.body);
+  file << "}";
+  file << "speeds_kmh" << g.speeds_kmh << "step_lengths_m" << g.step_lengths_m << "slopes_rad"
+       << g.slopes_rad;
+  if (table.fixed) {
+    file.writeComment("Held fixed while optimising (the prior's values, paper 3.4): knee damping,\n"
+                      "swing knee stiffness, torso rest angle per slope, torso damping.");
+    file << "fixed_controls"
+         << std::vector<double>{table.fixed->knee_damping, table.fixed->swing_knee_stiffness,
+                                table.fixed->torso_rest_per_slope, table.fixed->torso_damping};
+  }
+  file << "gaits" << "[";
+  for (size_t i = 0; i < table.entries.size(); ++i) {
+    const GaitTableEntry& e = table.entries[i];
+    file << "{" << "index" << static_cast<int>(i) << "solved" << static_cast<int>(e.solved)
+         << "feasible" << static_cast<int>(e.feasible);
+    if (e.solved) {
+      const Gait& gait = e.gait;
+      const GaitQuality& quality = e.quality;
+      const ControlVector controls = toControlVector(gait.controls);
+      file << "target"
+           << std::vector<double>{gait.target.speed, gait.target.step_length, gait.target.slope}
+           << "controls" << std::vector<double>(controls.begin(), controls.end()) << "q"
+           << toVector(gait.start.q) << "qdot" << toVector(gait.start.qdot) << "knees_locked"
+           << std::vector<int>{gait.start.knee_on_limit[0], gait.start.knee_on_limit[1]}
+           << "duration" << gait.stride_duration << "speed" << quality.speed
+           << "step_length" << quality.step_length << "effort" << quality.effort
+           << "periodicity_residual" << quality.periodicity_residual << "nlopt_result"
+           << quality.solver_status << "evaluations" << quality.evaluations;
+    }
+    file << "}";
+  }
+  file << "]";
+}
+
+GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions& body) {
+  common::ConfigFile file(path, "gait table");
+  GaitTable table;
+  GaitGrid& g = table.grid;
+  file.read("reference_height_m", g.reference_height_m, common::Need::kRequired);
+  file.read("gravity", g.gravity, common::Need::kRequired);
+  if (!(g.reference_height_m > 0 && g.gravity > 0))
+    file.problem("reference_height_m", "and gravity must be positive");
+  common::ConfigNode body_node = file.map("body_model", common::Need::kRequired);
+  table.body = dynamics::readBodyProportions(body_node);
+  g.leg_length_per_height = table.body.leg_length_per_height;
+  requireAscending(file, "speeds_kmh", g.speeds_kmh);
+  requireAscending(file, "step_lengths_m", g.step_lengths_m);
+  requireAscending(file, "slopes_rad", g.slopes_rad);
+  std::array<double, 4> fixed;
+  if (file.read("fixed_controls", fixed)) table.fixed = FixedControls{fixed[0], fixed[1], fixed[2], fixed[3]};
+
+  std::vector<common::ConfigNode> gaits = file.maps("gaits", common::Need::kRequired);
+  if (static_cast<int>(gaits.size()) != g.size())
+    file.problem("gaits", "must list " + std::to_string(g.size()) + " grid points, lists " +
+                              std::to_string(gaits.size()));
+  table.entries.resize(gaits.size());
+  for (int i = 0; i < static_cast<int>(gaits.size()); ++i) {
+    common::ConfigNode& node = gaits[i];
+    int index = -1;
+    node.read("index", index, common::Need::kRequired);
+    if (index != i) node.problem("index", "is " + std::to_string(index) + ": the gait is out of order");
+    GaitTableEntry& e = table.entries[i];
+    node.read("solved", e.solved, common::Need::kRequired);
+    node.read("feasible", e.feasible, common::Need::kRequired);
+    if (!e.solved) continue;
+    Gait& gait = e.gait;
+    std::array<double, 3> target{};
+    node.read("target", target, common::Need::kRequired);
+    gait.target = {target[0], target[1], target[2]};
+    ControlVector controls{};
+    node.read("controls", controls, common::Need::kRequired);
+    gait.controls = fromControlVector(controls, gait.target.slope);
+    std::array<double, dynamics::kNumCoordinates> q{}, qdot{};
+    node.read("q", q, common::Need::kRequired);
+    node.read("qdot", qdot, common::Need::kRequired);
+    for (int j = 0; j < dynamics::kNumCoordinates; ++j) {
+      gait.start.q[j] = q[j];
+      gait.start.qdot[j] = qdot[j];
+    }
+    std::array<double, dynamics::kNumKnees> knees{};
+    if (node.read("knees_locked", knees, common::Need::kRequired)) {
+      for (int k = 0; k < dynamics::kNumKnees; ++k) {
+        if (knees[k] != 0 && knees[k] != 1) node.problem("knees_locked", "must hold two flags, 0 or 1");
+        gait.start.knee_on_limit[k] = knees[k] == 1;
+      }
+    }
+    GaitQuality& quality = e.quality;
+    node.read("duration", gait.stride_duration, common::Need::kRequired);
+    node.read("speed", quality.speed, common::Need::kRequired);
+    node.read("step_length", quality.step_length, common::Need::kRequired);
+    node.read("effort", quality.effort, common::Need::kRequired);
+    // An infeasible gait may be infinitely far from periodic (it fell, or its knees changed).
+    node.read("periodicity_residual", quality.periodicity_residual, common::Need::kRequired, true);
+    node.read("nlopt_result", quality.solver_status, common::Need::kRequired);
+    node.read("evaluations", quality.evaluations, common::Need::kRequired);
+  }
+  std::vector<std::string> problems = dynamics::validate(table.body);
+  for (auto& problem : problems) problem = "body_model." + problem;
+  const std::vector<std::string> differ = dynamics::differences(table.body, body);
+  if (!differ.empty()) {
+    std::string list;
+    for (const auto& d : differ) list += (list.empty() ? "" : "; ") + d;
+    problems.push_back("body_model differs from the walker model in use (table vs model: " + list +
+                       "): optimise a table for this model with optimize_gaits");
+  }
+  file.finish(problems);
+  return table;
+}
+
+int keepLowerEffort(GaitTable& table, const GaitTable& other) {
+  const GaitGrid &a = table.grid, &b = other.grid;
+  if (a.speeds_kmh != b.speeds_kmh || a.step_lengths_m != b.step_lengths_m ||
+      a.slopes_rad != b.slopes_rad || a.reference_height_m != b.reference_height_m ||
+      a.leg_length_per_height != b.leg_length_per_height || a.gravity != b.gravity)
+    throw std::invalid_argument("keepLowerEffort: the gait tables have different grids");
+  if (!dynamics::differences(table.body, other.body).empty())
+    throw std::invalid_argument("keepLowerEffort: the gait tables are for different body models");
+  if (table.fixed != other.fixed)
+    throw std::invalid_argument("keepLowerEffort: the gait tables hold different controls fixed");
+  int taken = 0;
+  for (size_t i = 0; i < table.entries.size(); ++i) {
+    const GaitTableEntry& theirs = other.entries[i];
+    GaitTableEntry& ours = table.entries[i];
+    if (theirs.feasible && (!ours.feasible || theirs.quality.effort < ours.quality.effort)) {
+      ours = theirs;
+      ++taken;
+    }
+  }
+  return taken;
+}
+
+Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
+                     double slope_rad) {
+  const GaitGrid& g = table.grid;
+  const auto [iv, tv] = locate(g.speeds_kmh, speed_kmh, "speed", "km/h");
+  const auto [il, tl] = locate(g.step_lengths_m, step_length_m, "step length", "m");
+  const auto [is, ts] = locate(g.slopes_rad, slope_rad, "slope", "rad");
+
+  ControlVector controls{};
+  Gait result;
+  result.start.q.setZero();
+  result.start.qdot.setZero();
+  double best_weight = -1;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int dv = corner & 1, dl = (corner >> 1) & 1, ds = (corner >> 2) & 1;
+    const double w = (dv ? tv : 1 - tv) * (dl ? tl : 1 - tl) * (ds ? ts : 1 - ts);
+    const int index = g.index(iv + dv, il + dl, is + ds);
+    const GaitTableEntry& e = table.entries.at(index);
+    if (!e.feasible) {
+      if (w == 0) continue;  // exactly on a face: this corner does not contribute
+      std::ostringstream message;
+      message << "the gait table has no feasible gait at " << g.speeds_kmh[iv + dv] << " km/h, "
+              << g.step_lengths_m[il + dl] << " m, " << g.slopes_rad[is + ds]
+              << " rad, which the target needs";
+      throw std::out_of_range(message.str());
+    }
+    const ControlVector c = toControlVector(e.gait.controls);
+    for (int k = 0; k < kNumControls; ++k) controls[k] += w * c[k];
+    result.start.q += w * e.gait.start.q;
+    result.start.qdot += w * e.gait.start.qdot;
+    if (w > best_weight) {
+      best_weight = w;
+      result.start.knee_on_limit = e.gait.start.knee_on_limit;
+    }
+  }
+  result.target = g.target(speed_kmh, step_length_m, slope_rad);
+  result.controls = fromControlVector(controls, slope_rad);
+  return result;
+}
+
+}  // namespace kneed_walker::core::gait

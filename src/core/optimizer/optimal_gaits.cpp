@@ -1,0 +1,349 @@
+#include "kneed_walker/core/optimizer/optimal_gaits.h"
+
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace kneed_walker::core::optimizer {
+namespace {
+
+// The optimisation variables: θ and ι in the order of gait::Control, then x0 in reduced
+// coordinates.
+constexpr int kNumControlVariables = gait::kNumControls;
+
+// Bounds of the controls, dimensionless (torque unit M g L, time unit √(L/g)). The torso
+// spring must hold the torso up against gravity (its gravity torque about the hip is about
+// 0.23 φ), so κTo ≥ 0.5 and dTo ≥ 0.1; its rest angle stays within ±0.15 rad of the vertical (the paper's
+// prior puts it at γ/3), else the optimum turns the torso spring into a constant hip motor
+// with the torso leaning far forward.
+constexpr double kControlLower[kNumControlVariables] = {0, 0, 0, 0, 0, 0, 0.5, -0.15, 0.1, 0};
+constexpr double kControlUpper[kNumControlVariables] = {30, 5, 5, 1.5, 5, 30, 50, 0.15, 20, 0.5};
+constexpr double kAngleBound = 1.3;  // rad, |q| of x0
+constexpr double kRateBound = 6.0;   // per natural time unit, |q̇| of x0
+
+// The problem as NLopt sees it. Objective and constraints at one x come from one stride, and
+// their gradients from one sweep of central differences, cached for both callbacks.
+class GaitProblem {
+ public:
+  GaitProblem(const dynamics::WalkerSimulator& simulator, const gait::GaitTarget& target,
+              const GaitCoordinates& coordinates, const GaitOptimizerOptions& options)
+      : sim_(simulator),
+        target_(target),
+        coordinates_(coordinates),
+        options_(options),
+        n_(kNumControlVariables + coordinates.size()),
+        m_(coordinates.size() + 2) {
+    lower_.assign(n_, 0);
+    upper_.assign(n_, 0);
+    for (int i = 0; i < kNumControlVariables; ++i) {
+      lower_[i] = kControlLower[i];
+      upper_[i] = kControlUpper[i];
+    }
+    // The torso's rest angle is bounded about the vertical, not the slope's normal: an upright
+    // torso is at −γ in the walker's slope frame.
+    lower_[gait::kTorsoRestAngle] -= target.slope;
+    upper_[gait::kTorsoRestAngle] -= target.slope;
+    if (options.fixed) {
+      dynamics::WalkerControls zero;
+      zero.ground_slope = target.slope;
+      const gait::ControlVector held =
+          gait::toControlVector(gait::withFixedControls(zero, *options.fixed));
+      for (int i = 0; i < kNumControlVariables; ++i)
+        if (gait::isFixed(static_cast<gait::Control>(i))) lower_[i] = upper_[i] = held[i];
+    }
+    const int angles = coordinates.angles();
+    for (int i = kNumControlVariables; i < n_; ++i) {
+      const bool angle = i - kNumControlVariables < angles;
+      lower_[i] = angle ? -kAngleBound : -kRateBound;
+      upper_[i] = angle ? kAngleBound : kRateBound;
+    }
+  }
+
+  int variables() const { return n_; }
+  int constraints() const { return m_; }
+  const std::vector<double>& lower() const { return lower_; }
+  const std::vector<double>& upper() const { return upper_; }
+  int evaluations() const { return evaluations_; }
+
+  std::vector<double> pack(const gait::Gait& gait) const {
+    std::vector<double> x(n_);
+    const gait::ControlVector controls = gait::toControlVector(gait.controls);
+    std::copy(controls.begin(), controls.end(), x.begin());
+    const GaitVector r = coordinates_.reduce(gait.start);
+    for (int i = 0; i < r.size(); ++i) x[kNumControlVariables + i] = r[i];
+    for (int i = 0; i < n_; ++i) x[i] = std::clamp(x[i], lower_[i], upper_[i]);
+    return x;
+  }
+
+  // The stride from x: controls and start state.
+  dynamics::StrideResult simulate(const double* x, dynamics::WalkerControls& controls, dynamics::WalkerState& start) const {
+    gait::ControlVector vector;
+    std::copy(x, x + kNumControlVariables, vector.begin());
+    controls = gait::fromControlVector(vector, target_.slope);
+    GaitVector r(coordinates_.size());
+    for (int i = 0; i < r.size(); ++i) r[i] = x[kNumControlVariables + i];
+    start = coordinates_.expand(r);
+    ++evaluations_;
+    return sim_.stride(controls, start);
+  }
+
+  // Objective and constraints at x (no gradients).
+  double evaluate(const double* x, double* c) const {
+    dynamics::WalkerControls controls;
+    dynamics::WalkerState start;
+    const dynamics::StrideResult stride = simulate(x, controls, start);
+    if (!stride.completed) {
+      // A fall: no periodic gait here. Large, finite values keep SLSQP's line search away.
+      for (int i = 0; i < m_; ++i) c[i] = 10.0;
+      return 1e3;
+    }
+    const GaitVector end = coordinates_.reduce(stride.end);
+    for (int i = 0; i < end.size(); ++i) c[i] = end[i] - x[kNumControlVariables + i];
+    c[m_ - 2] = stride.speed - target_.speed;
+    c[m_ - 1] = stride.step_length - target_.step_length;
+    return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
+  }
+
+  double objective(const double* x, double* grad) {
+    refresh(x, grad != nullptr);
+    if (grad) std::copy(grad_f_.begin(), grad_f_.end(), grad);
+    return f_;
+  }
+
+  void constraintValues(const double* x, double* c, double* grad) {
+    refresh(x, grad != nullptr);
+    std::copy(c_.begin(), c_.end(), c);
+    if (grad) std::copy(grad_c_.begin(), grad_c_.end(), grad);
+  }
+
+ private:
+  void refresh(const double* x, bool need_gradient) {
+    const bool same = !x_.empty() && std::equal(x_.begin(), x_.end(), x);
+    if (!same) {
+      x_.assign(x, x + n_);
+      c_.assign(m_, 0);
+      f_ = evaluate(x, c_.data());
+      has_gradient_ = false;
+    }
+    if (!need_gradient || has_gradient_) return;
+    grad_f_.assign(n_, 0);
+    grad_c_.assign(static_cast<size_t>(m_) * n_, 0);
+    std::vector<double> probe = x_, c_plus(m_), c_minus(m_);
+    for (int j = 0; j < n_; ++j) {
+      // Central differences, one-sided at a bound (ι ≥ 0 must stay ≥ 0).
+      const double h = options_.difference_step * std::max(1.0, std::abs(x_[j]));
+      const double up = std::min(x_[j] + h, upper_[j]);
+      const double down = std::max(x_[j] - h, lower_[j]);
+      if (up <= down) continue;  // a fixed control: its gradient entries stay 0
+      probe[j] = up;
+      const double f_plus = evaluate(probe.data(), c_plus.data());
+      probe[j] = down;
+      const double f_minus = evaluate(probe.data(), c_minus.data());
+      probe[j] = x_[j];
+      const double width = up - down;
+      grad_f_[j] = (f_plus - f_minus) / width;
+      for (int i = 0; i < m_; ++i)
+        grad_c_[static_cast<size_t>(i) * n_ + j] = (c_plus[i] - c_minus[i]) / width;
+    }
+    has_gradient_ = true;
+  }
+
+  const dynamics::WalkerSimulator& sim_;
+  gait::GaitTarget target_;
+  GaitCoordinates coordinates_;
+  GaitOptimizerOptions options_;
+  int n_, m_;
+  std::vector<double> lower_, upper_;
+  mutable int evaluations_ = 0;
+  std::vector<double> x_, c_, grad_f_, grad_c_;
+  double f_ = 0;
+  bool has_gradient_ = false;
+};
+
+double objectiveCallback(unsigned, const double* x, double* grad, void* data) {
+  return static_cast<GaitProblem*>(data)->objective(x, grad);
+}
+
+void constraintCallback(unsigned, double* result, unsigned, const double* x, double* grad,
+                        void* data) {
+  static_cast<GaitProblem*>(data)->constraintValues(x, result, grad);
+}
+
+}  // namespace
+
+double gaitEffort(const dynamics::StrideResult& stride, double toe_off_impulse, const EffortWeights& w) {
+  const dynamics::JointTorques& sq = stride.integrals.squared;
+  const double torques = w.stance_knee * sq[dynamics::kStanceKnee] + w.swing_knee * sq[dynamics::kSwingKnee] +
+                         w.hip * sq[dynamics::kHip] + w.torso * sq[dynamics::kTorsoJoint];
+  return w.impulse * std::pow(toe_off_impulse, w.impulse_exponent) +
+         (w.torque_unit_scale * torques + w.scuff * stride.integrals.scuff) /
+             std::max(stride.duration, 1e-9);
+}
+
+namespace {
+
+// One SLSQP solve in the knee modes of `start`, then a Newton polish of x0.
+OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::GaitTarget& target,
+                              const gait::Gait& start, const GaitOptimizerOptions& options) {
+  const GaitCoordinates coordinates(kneeModes(start.start));
+  GaitProblem problem(sim, target, coordinates, options);
+
+  nlopt::opt solver(nlopt::LD_SLSQP, static_cast<unsigned>(problem.variables()));
+  solver.set_lower_bounds(problem.lower());
+  solver.set_upper_bounds(problem.upper());
+  solver.set_min_objective(objectiveCallback, &problem);
+  solver.add_equality_mconstraint(
+      constraintCallback, &problem,
+      std::vector<double>(problem.constraints(), options.constraint_tolerance));
+  solver.set_xtol_rel(options.relative_tolerance);
+  solver.set_maxeval(options.max_iterations);
+
+  std::vector<double> x = problem.pack(start);
+  double effort = 0;
+  OptimalGait result;
+  try {
+    result.nlopt_result = solver.optimize(x, effort);
+  } catch (const nlopt::roundoff_limited&) {
+    result.nlopt_result = nlopt::ROUNDOFF_LIMITED;
+  } catch (const std::runtime_error&) {
+    result.nlopt_result = nlopt::FAILURE;
+  }
+
+  result.target = target;
+  result.stride = problem.simulate(x.data(), result.controls, result.start);
+  // SLSQP stops on its step tolerance with the constraints met to about 1e-6; Newton on the
+  // stride map at the optimised controls makes x0 periodic to rounding (changing V and L by
+  // about as much).
+  PeriodicGait polished = findPeriodicGait(sim, result.controls, result.start);
+  if (!polished.converged && polished.residual < 1e-6) {
+    // Periodic, but its knees end in other modes than x0 was given in (a knee that leaves its
+    // limit at zero rate is locked): start again from the end of the stride.
+    dynamics::WalkerState from_end = polished.stride.end;
+    from_end.stance_foot_x = 0;
+    polished = findPeriodicGait(sim, result.controls, from_end);
+  }
+  if (polished.converged) {
+    result.start = polished.start;
+    result.stride = polished.stride;
+  }
+  result.effort = gaitEffort(result.stride, result.controls.toe_off_impulse, options.weights);
+  result.periodicity_residual =
+      std::max((result.stride.end.q - result.start.q).lpNorm<Eigen::Infinity>(),
+               (result.stride.end.qdot - result.start.qdot).lpNorm<Eigen::Infinity>());
+  if (!result.stride.completed || kneeModes(result.stride.end) != kneeModes(result.start))
+    result.periodicity_residual = std::numeric_limits<double>::infinity();
+  result.speed_error = std::abs(result.stride.speed - target.speed) / target.speed;
+  result.step_length_error =
+      std::abs(result.stride.step_length - target.step_length) / target.step_length;
+  result.evaluations = problem.evaluations();
+  result.stride_duration = result.stride.duration;
+  return result;
+}
+
+}  // namespace
+
+OptimalGait optimizeGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
+                         const gait::Gait& start, const GaitOptimizerOptions& options) {
+  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(proportions), options.simulation);
+  OptimalGait result = optimizeInPattern(sim, target, start, options);
+  // Which knees stay locked through heel strike is a property of the gait (a stance knee that
+  // flexes right at contact is not locked): when the solution ends in other knee modes than it
+  // started in, solve again in those.
+  if (!result.feasible() && result.stride.completed &&
+      kneeModes(result.stride.end) != kneeModes(result.start)) {
+    gait::Gait restart = result;
+    restart.start = result.stride.end;
+    restart.start.stance_foot_x = 0;
+    OptimalGait again = optimizeInPattern(sim, target, restart, options);
+    again.evaluations += result.evaluations;
+    if (again.feasible() || again.periodicity_residual < result.periodicity_residual)
+      result = again;
+  }
+  return result;
+}
+
+OptimalGait initialGaitGuess() {
+  const PeriodicGait passive = mcGeerPassiveGait();
+  OptimalGait guess;
+  guess.start = passive.start;
+  guess.start.q[dynamics::kTorso] = 0;
+  guess.start.qdot[dynamics::kTorso] = 0;
+  guess.controls.springs.torso_stiffness = 3.0;
+  guess.controls.springs.torso_damping = 1.0;
+  guess.controls.ground_slope = kMcGeerSlope;
+  guess.target = {passive.stride.speed, passive.stride.step_length, kMcGeerSlope};
+  guess.stride = passive.stride;
+  guess.stride_duration = passive.stride.duration;
+  return guess;
+}
+
+namespace {
+
+OptimalGait continueFromPassiveGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
+                                    const GaitOptimizerOptions& options, int target_steps) {
+  // Adaptive continuation on a homotopy parameter a ∈ [0, 1]: a failed step is retried at half
+  // the size from the last feasible gait, a successful one lets the next grow.
+  auto follow = [&](OptimalGait gait, auto solveAt) {
+    double reached = 0, step = 1.0 / target_steps;
+    while (reached < 1 && step > 1.0 / 512) {
+      const double next = std::min(1.0, reached + step);
+      const OptimalGait candidate = solveAt(next, gait);
+      if (candidate.feasible()) {
+        gait = candidate;
+        reached = next;
+        step *= 1.5;
+      } else {
+        step *= 0.5;
+        if (step <= 1.0 / 512) return candidate;  // give up: report the failure
+      }
+    }
+    return gait;
+  };
+  OptimalGait gait = initialGaitGuess();
+  gait = follow(gait, [&](double a, const OptimalGait& from) {
+    dynamics::BodyProportions raised = proportions;
+    raised.torso.com_along *= a;  // from McGeer's hip mass up to the torso's place
+    return optimizeGait(raised, from.target, from, options);
+  });
+  if (!gait.feasible()) return gait;
+  const gait::GaitTarget start = gait.target;
+  return follow(gait, [&](double a, const OptimalGait& from) {
+    const gait::GaitTarget between{start.speed + a * (target.speed - start.speed),
+                             start.step_length + a * (target.step_length - start.step_length),
+                             start.slope + a * (target.slope - start.slope)};
+    return optimizeGait(proportions, between, from, options);
+  });
+}
+
+}  // namespace
+
+OptimalGait seedGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
+                     const GaitOptimizerOptions& options, int target_steps) {
+  // A continuation can dead-end on a gait from which no step reaches on; the path taken
+  // depends on the first step size, so try half and double it before giving up.
+  OptimalGait gait;
+  for (const int steps : {target_steps, std::max(1, target_steps / 2), 2 * target_steps}) {
+    gait = continueFromPassiveGait(proportions, target, options, steps);
+    if (gait.feasible()) break;
+  }
+  return gait;
+}
+
+gait::GaitTableEntry tableEntry(const OptimalGait& gait) {
+  gait::GaitTableEntry entry;
+  entry.solved = true;
+  entry.feasible = gait.feasible();
+  entry.gait = gait;
+  entry.quality.speed = gait.stride.speed;
+  entry.quality.step_length = gait.stride.step_length;
+  entry.quality.effort = gait.effort;
+  entry.quality.periodicity_residual = gait.periodicity_residual;
+  entry.quality.solver_status = gait.nlopt_result;
+  entry.quality.evaluations = gait.evaluations;
+  return entry;
+}
+
+}  // namespace kneed_walker::core::optimizer
+

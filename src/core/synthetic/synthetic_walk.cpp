@@ -1,0 +1,106 @@
+#include "kneed_walker/core/synthetic/synthetic_walk.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace kneed_walker::core::synthetic {
+
+std::vector<std::string> validate(const SyntheticWalkOptions& o) {
+  std::vector<std::string> problems;
+  auto positive = [&](const char* name, double v) {
+    if (!(std::isfinite(v) && v > 0)) problems.push_back(std::string(name) + " must be > 0");
+  };
+  positive("speed_kmh", o.speed_kmh);
+  positive("step_length_m", o.step_length_m);
+  positive("duration_s", o.duration_s);
+  positive("fps", o.fps);
+  if (!(o.person_height_m >= 1.0 && o.person_height_m <= 2.3))
+    problems.push_back("person_height_m must lie in [1.0, 2.3]");
+  if (!(std::abs(o.slope_rad) <= 0.2)) problems.push_back("slope_rad must lie in [-0.2, 0.2]");
+  if (!std::isfinite(o.heading_rad)) problems.push_back("heading_rad must be finite");
+  if (!o.start_m.allFinite()) problems.push_back("start_m must be finite");
+  if (o.max_attempts < 1) problems.push_back("max_attempts must be >= 1");
+  if (o.duration_s * o.fps > 100000) problems.push_back("duration_s * fps must be at most 100000 frames");
+  return problems;
+}
+
+SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOptions& prior_options,
+                             const SyntheticWalkOptions& o) {
+  const auto problems = validate(o);
+  if (!problems.empty()) throw std::invalid_argument("synthetic walk: " + problems.front());
+
+  prior::requirePriorTable(table, prior_options);
+  SyntheticWalk walk;
+  const double leg_length_m = table.grid.leg_length_per_height * o.person_height_m;
+  walk.leg_length_m = leg_length_m;
+  // Froude similarity: the same dimensionless gait for the table's reference person.
+  const double reference_leg_m = table.grid.referenceLegLength();
+  const double speed_ref_kmh = o.speed_kmh * std::sqrt(reference_leg_m / leg_length_m);
+  const double step_ref_m = o.step_length_m * reference_leg_m / leg_length_m;
+  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
+  walk.gait = gait::interpolateGait(table, speed_ref_kmh, step_ref_m, o.slope_rad);
+  const dynamics::StrideResult stride = sim.stride(walk.gait.controls, walk.gait.start);
+  if (!stride.completed)
+    throw std::runtime_error("synthetic walk: the interpolated gait does not complete a stride");
+  walk.gait.stride_duration = stride.duration;
+
+  prior::PriorOptions options = prior_options;
+  if (o.slope_rad != 0) options.placement.heading_sigma = 0;  // the slope is one plane
+  const prior::WalkerPrior prior(sim, walk.gait, options);
+  const body::BodyShape shape = body::BodyShape::forHeight(o.person_height_m);
+  const double frame_s = 1.0 / o.fps;
+  const double dt = frame_s / std::sqrt(leg_length_m / table.grid.gravity);  // natural time
+  const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;
+  const Eigen::Vector2d heading(std::cos(o.heading_rad), std::sin(o.heading_rad));
+  // XY distance along the heading of a walker length along the slope.
+  const double along_xy_m = leg_length_m * std::cos(o.slope_rad);
+  const double foot_radius_m = sim.model().foot_radius * leg_length_m;
+
+  common::Random random(o.seed);
+  std::uniform_real_distribution<double> phase(0.0, 1.0);
+  for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
+    prior::WalkerParticle particle = prior.sample(phase(random), random);
+    prior::PlacementState placement;
+    placement.value.heading_rad = o.heading_rad;
+    const dynamics::Point foot = dynamics::stanceFootCentre(sim.map(), particle.walker.q, particle.walker.stance_foot_x);
+    placement.value.ground_origin_m = o.start_m - along_xy_m * foot.real() * heading;
+    walk.ground = vision::GroundPlane{placement.value.ground_origin_m, o.slope_rad, o.heading_rad};
+    walk.frames.clear();
+    walk.frames.reserve(frame_count);
+    bool fell = false;
+    for (int i = 0; i < frame_count && !fell; ++i) {
+      if (i > 0) {
+        fell = prior.transition(particle, dt, random).fell;
+        const dynamics::Point stance =
+            dynamics::stanceFootCentre(sim.map(), particle.walker.q, particle.walker.stance_foot_x);
+        prior::stepPlacement(placement, options.placement, frame_s, along_xy_m * stance.real(), random);
+      }
+      SyntheticFrame frame;
+      frame.time_s = i * frame_s;
+      frame.walker = particle.walker;
+      frame.pose = body::bodyPose(sim.map(), particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
+      if (i > 0 && particle.walker.heel_strikes == walk.frames.back().walker.heel_strikes) {
+        // The stance foot rolls without slipping (its centre moves by −R Δθ along the walk);
+        // what the placement processes (sway, turning, a turned-out leg) would make it slide
+        // moves the body over the foot instead.
+        const SyntheticFrame& previous = walk.frames.back();
+        const int side = particle.walker.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
+        const double turn = particle.walker.q[dynamics::kStanceShank] - previous.walker.q[dynamics::kStanceShank];
+        const Eigen::Vector3d rolled_to =
+            previous.pose.foot_centres[side] - foot_radius_m * turn * frame.pose.forward;
+        placement.value.ground_origin_m += (rolled_to - frame.pose.foot_centres[side]).head<2>();
+        frame.pose = body::bodyPose(sim.map(), particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
+      }
+      frame.placement = placement.value;
+      walk.frames.push_back(frame);
+    }
+    if (!fell) return walk;
+  }
+  std::ostringstream message;
+  message << "synthetic walk: the prior fell in all " << o.max_attempts
+          << " samples; try a gait nearer the table's or lower prior noise";
+  throw std::runtime_error(message.str());
+}
+
+}  // namespace kneed_walker::core::synthetic

@@ -1,0 +1,45 @@
+#include "kneed_walker/core/tracking/tracker_options.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace kneed_walker::core::tracking {
+namespace {
+
+// Appends "name = value is outside [lo, hi] (meaning)" when value is not inside the range.
+template <typename T>
+void checkRange(std::vector<std::string>& problems, const char* name, T value, T lo, T hi,
+                const char* meaning) {
+  const bool finite = std::isfinite(static_cast<double>(value));
+  if (finite && value >= lo && value <= hi) return;
+  std::ostringstream message;
+  message << name << " = " << value << " is outside [" << lo << ", " << hi << "] ("
+          << meaning << ")";
+  problems.push_back(message.str());
+}
+
+}  // namespace
+
+std::vector<std::string> validate(const TrackerOptions& o) {
+  std::vector<std::string> problems;
+  checkRange(problems, "num_particles", o.num_particles, 1, 1000000, "particle count");
+  checkRange(problems, "resample_ess_threshold", o.resample_ess_threshold, 1e-9,
+             static_cast<double>(o.num_particles),
+             "effective sample size below which to resample; at most num_particles");
+  checkRange(problems, "resample_lag_frames", o.resample_lag_frames, 0, 30,
+             "frames back to resample from (paper's Δs)");
+  checkRange(problems, "resample_mixing", o.resample_mixing, 0.0, 1.0,
+             "weight of the current-time multinomial (paper's π)");
+  checkRange(problems, "num_threads", o.num_threads, 0, 256, "worker threads; 0 = all cores");
+  checkRange(problems, "person_height_m", o.person_height_m, 1.0, 2.3, "standing height, m");
+  checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");
+  checkRange(problems, "ground_slope_rad", o.ground_slope_rad, -0.2, 0.2,
+             "ground slope, rad, positive uphill");
+  checkRange(problems, "default_frame_interval_s", o.default_frame_interval_s, 1e-4, 1.0,
+             "frame interval used when stamps are unusable, s");
+  checkRange(problems, "max_frame_gap_s", o.max_frame_gap_s, o.default_frame_interval_s, 60.0,
+             "stamp gap that reinitialises the tracker, s; at least default_frame_interval_s");
+  return problems;
+}
+
+}  // namespace kneed_walker::core::tracking

@@ -1,0 +1,100 @@
+#include "kneed_walker/core/vision/body_projection.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace kneed_walker::core::vision {
+namespace {
+
+// Andrew's monotone chain on a fixed-size point set; writes the hull counter-clockwise (in
+// image coordinates, y down) into `hull` and returns its size. No allocation.
+template <size_t N>
+int convexHull(std::array<Eigen::Vector2d, N> points, std::array<Eigen::Vector2d, N>& hull) {
+  std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::array<Eigen::Vector2d, 2 * N> chain;
+  int k = 0;
+  for (size_t i = 0; i < N; ++i) {  // lower hull
+    while (k >= 2 && cross(chain[k - 2], chain[k - 1], points[i]) <= 0) --k;
+    chain[k++] = points[i];
+  }
+  for (int i = static_cast<int>(N) - 2, lower = k + 1; i >= 0; --i) {  // upper hull
+    while (k >= lower && cross(chain[k - 2], chain[k - 1], points[i]) <= 0) --k;
+    chain[k++] = points[i];
+  }
+  const int size = std::min<int>(k - 1, N);  // the last point repeats the first
+  std::copy(chain.begin(), chain.begin() + size, hull.begin());
+  return size;
+}
+
+}  // namespace
+
+PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
+  PartAxes axes;
+  const auto& j = pose.joints;
+  axes.proximal[body::kTorsoPart] = j[body::kWaist];
+  axes.distal[body::kTorsoPart] = j[body::kNeck];
+  const Eigen::Vector3d head_axis = (j[body::kHead] - j[body::kNeck]).normalized();
+  const double head_half = 0.6 * shape.parts[body::kHeadPart].proximal_depth_m;
+  axes.proximal[body::kHeadPart] = j[body::kHead] - head_half * head_axis;
+  axes.distal[body::kHeadPart] = j[body::kHead] + head_half * head_axis;
+  for (int side = 0; side < 2; ++side) {
+    const Eigen::Vector3d& hip = j[body::kLeftHip + side];
+    const Eigen::Vector3d& knee = j[body::kLeftKnee + side];
+    const Eigen::Vector3d& ankle = j[body::kLeftAnkle + side];
+    axes.proximal[body::kLeftThighPart + side] = hip;
+    axes.distal[body::kLeftThighPart + side] = knee;
+    axes.proximal[body::kLeftShankPart + side] = knee;
+    axes.distal[body::kLeftShankPart + side] = ankle;
+    // The foot is rigid with the shank: along the walking direction made square to the shank,
+    // half way between the ankle and the sole, a quarter of its length behind the ankle.
+    const Eigen::Vector3d down = (ankle - knee).normalized();
+    const Eigen::Vector3d ahead = (pose.forward - pose.forward.dot(down) * down).normalized();
+    const Eigen::Vector3d middle = ankle + 0.5 * shape.ankle_height_m * down;
+    axes.proximal[body::kLeftFootPart + side] = middle - 0.25 * shape.foot_length_m * ahead;
+    axes.distal[body::kLeftFootPart + side] = middle + 0.75 * shape.foot_length_m * ahead;
+  }
+  return axes;
+}
+
+void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
+                      BodyOutlines& outlines) {
+  const PartAxes axes = partAxes(pose, shape);
+  std::array<double, kOutlineSamples> cosines, sines;
+  for (int i = 0; i < kOutlineSamples; ++i) {
+    cosines[i] = std::cos(2 * M_PI * i / kOutlineSamples);
+    sines[i] = std::sin(2 * M_PI * i / kOutlineSamples);
+  }
+  for (int p = 0; p < body::kNumBodyParts; ++p) {
+    PartOutline& outline = outlines[p];
+    const body::PartShape& part = shape.parts[p];
+    const Eigen::Vector3d axis = (axes.distal[p] - axes.proximal[p]).normalized();
+    const Eigen::Vector3d across = (pose.left - pose.left.dot(axis) * axis).normalized();
+    const Eigen::Vector3d depth = axis.cross(across);
+    std::array<Eigen::Vector2d, 2 * kOutlineSamples> points;
+    outline.visible = true;
+    for (int end = 0; end < 2 && outline.visible; ++end) {
+      const Eigen::Vector3d& centre = end == 0 ? axes.proximal[p] : axes.distal[p];
+      const double half_width = 0.5 * (end == 0 ? part.proximal_width_m : part.distal_width_m);
+      const double half_depth = 0.5 * (end == 0 ? part.proximal_depth_m : part.distal_depth_m);
+      for (int i = 0; i < kOutlineSamples; ++i) {
+        const auto pixel = camera.project(centre + half_width * cosines[i] * across +
+                                          half_depth * sines[i] * depth);
+        if (!pixel) {
+          outline.visible = false;
+          break;
+        }
+        points[end * kOutlineSamples + i] = *pixel;
+      }
+    }
+    outline.size = outline.visible ? convexHull(points, outline.hull) : 0;
+  }
+}
+
+}  // namespace kneed_walker::core::vision

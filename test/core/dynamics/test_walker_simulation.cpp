@@ -1,0 +1,164 @@
+#include "kneed_walker/core/dynamics/walker_simulation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace kneed_walker::core::dynamics {
+namespace {
+
+const WalkerModel kPerson = scaleToPerson(BodyProportions{}, 1.75, 70);
+
+WalkerControls activeControls() {
+  WalkerControls c;
+  c.springs.stance_knee_stiffness = 50;
+  c.springs.stance_knee_damping = 3;
+  c.springs.swing_knee_stiffness = 10;
+  c.springs.swing_knee_rest_angle = 0.4;
+  c.springs.swing_knee_damping = 2;
+  c.springs.hip_stiffness = 30;
+  c.springs.torso_stiffness = 300;
+  c.springs.torso_damping = 20;
+  c.offsets.stance_knee = 20;
+  c.offsets.stance_ankle = 5;
+  c.ground_slope = 0.03;
+  return c;
+}
+
+TEST(WalkerSimulation, TorquesChangeEnergyByExactlyTheirWork) {
+  SimulationOptions fine;
+  fine.max_step = 0.004;  // the identity holds to the integrator's tolerance
+  const WalkerSimulator sim(kPerson, fine);
+  const WalkerControls controls = activeControls();
+  WalkerState s;
+  s.q << 0.05, 0.1, -0.2, -0.1, -0.5;  // knees bent: no limit, swing foot clear
+  s.qdot << 0.2, -0.8, -0.5, 1.0, 0.5;
+  const double e0 = sim.mechanicalEnergy(controls, s);
+  TorqueIntegrals integrals;
+  const AdvanceReport report = sim.advance(controls, s, 0.3, &integrals);
+  ASSERT_EQ(report.heel_strikes + report.knee_limit_events, 0) << "the window must hold no event";
+  ASSERT_FALSE(report.fell);
+  const double change = sim.mechanicalEnergy(controls, s) - e0;
+  std::cout << "energy change " << change << " J, work " << integrals.work << " J\n";
+  EXPECT_GT(std::abs(integrals.work), 1.0) << "the torques should do real work";
+  EXPECT_NEAR(change, integrals.work, 1e-8 * std::abs(integrals.work));
+}
+
+TEST(WalkerSimulation, PassiveStridesOnlyLoseEnergyAtEvents) {
+  const WalkerSimulator sim(mcGeerPassiveWalker());
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  WalkerState s;
+  s.q << 0, 0.28, 0.28, -0.45, -0.45;
+  s.qdot << 0, -0.36, -0.36, 0.09, 0.09;
+  s.knee_on_limit = {true, true};
+  for (int stride = 0; stride < 10; ++stride) {
+    const StrideResult r = sim.stride(passive, s);
+    ASSERT_TRUE(r.completed) << "stride " << stride;
+    EXPECT_EQ(r.integrals.work, 0.0);
+    EXPECT_LE(sim.mechanicalEnergy(passive, r.end), sim.mechanicalEnergy(passive, s) + 1e-12);
+    EXPECT_GT(r.step_length, 0.3);
+    s = r.end;
+  }
+}
+
+// The scuff integral counts a swing foot passing the stance foot lower than the margin: McGeer's
+// passive gait swings its foot within a few millimetres of the ground.
+TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  WalkerState s;
+  s.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
+  s.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
+  s.knee_on_limit = {true, false};
+  double previous = 0;
+  for (double margin : {-1.0, 0.0, 0.01, 0.05}) {
+    SimulationOptions options;
+    options.clearance_margin = margin;
+    const WalkerSimulator sim(mcGeerPassiveWalker(), options);
+    const StrideResult stride = sim.stride(passive, s);
+    ASSERT_TRUE(stride.completed);
+    if (margin < 0) EXPECT_EQ(stride.integrals.scuff, 0.0);
+    if (margin >= 0.01) EXPECT_GT(stride.integrals.scuff, previous) << "a higher margin costs more";
+    previous = stride.integrals.scuff;
+    std::cout << "margin " << margin << " L: scuff integral " << stride.integrals.scuff << "\n";
+  }
+}
+
+TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
+  const WalkerSimulator sim(kPerson);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double frame = 1.0 / 600;  // dense checks: 20 per 1/30 s frame
+  int heel_strikes = 0, knee_events = 0, walkers_walking = 0;
+  double worst = 0;
+  for (int walker = 0; walker < 150; ++walker) {
+    WalkerControls c;
+    c.springs.stance_knee_stiffness = 150 + 100 * u(rng);
+    c.springs.stance_knee_damping = 3 + 2 * u(rng);
+    c.springs.swing_knee_stiffness = 5 * (1 + u(rng));
+    c.springs.swing_knee_damping = 1 + u(rng);
+    c.springs.hip_stiffness = 60 + 40 * u(rng);
+    c.springs.torso_stiffness = 800 + 300 * u(rng);
+    c.springs.torso_rest_angle = 0.05 * u(rng);
+    c.springs.torso_damping = 100;
+    c.toe_off_impulse = 10 * (1 + u(rng));
+    c.ground_slope = 0.07 * u(rng);
+    WalkerState s;
+    const double a = 0.3 + 0.05 * u(rng);
+    s.q << 0.05 * u(rng), a, a, -a + 0.05 * u(rng), -a - 0.1 + 0.1 * u(rng);
+    s.qdot << 0.2 * u(rng), -1.3 + 0.3 * u(rng), -1.3 + 0.3 * u(rng), 0.5 * u(rng), -1 + u(rng);
+    s.knee_on_limit = {true, false};
+    int strikes_before = 0;
+    for (int f = 0; f < static_cast<int>(2.0 / frame) && !s.fallen; ++f) {
+      const AdvanceReport r = sim.advance(c, s, frame);
+      heel_strikes += r.heel_strikes;
+      knee_events += r.knee_limit_events;
+      strikes_before += r.heel_strikes;
+      for (int k = 0; k < kNumKnees; ++k) worst = std::min(worst, kneeFlexion(s.q, k));
+    }
+    walkers_walking += strikes_before >= 2;
+  }
+  std::cout << heel_strikes << " heel strikes, " << knee_events << " knee-limit events, "
+            << walkers_walking << " of 150 walkers made 2+ steps; worst flexion " << worst
+            << " rad\n";
+  EXPECT_GT(heel_strikes, 150) << "the test must exercise many strides";
+  EXPECT_GT(knee_events, 150);
+  EXPECT_GE(worst, -1e-6);
+}
+
+TEST(WalkerSimulation, AnyFrameIntervalGivesTheSameMotion) {
+  const WalkerSimulator sim(kPerson);
+  const WalkerControls controls = activeControls();
+  WalkerState start;
+  start.q << 0.0, 0.3, 0.3, -0.3, -0.4;
+  start.qdot << 0.0, -1.2, -1.2, 0.5, -0.5;
+  start.knee_on_limit = {true, false};
+  WalkerState once = start, in_steps = start;
+  const AdvanceReport r = sim.advance(controls, once, 0.4);
+  for (int i = 0; i < 12; ++i) sim.advance(controls, in_steps, 0.4 / 12);
+  ASSERT_GT(r.knee_limit_events + r.heel_strikes, 0) << "the interval should hold events";
+  EXPECT_LT((once.q - in_steps.q).lpNorm<Eigen::Infinity>(), 1e-6);
+  EXPECT_LT((once.qdot - in_steps.qdot).lpNorm<Eigen::Infinity>(), 1e-5);
+  EXPECT_EQ(once.heel_strikes, in_steps.heel_strikes);
+  WalkerState again = start;
+  sim.advance(controls, again, 0.4);
+  EXPECT_EQ(again.q, once.q) << "deterministic";
+}
+
+TEST(WalkerSimulation, AFallIsDetectedAndFreezesTheState) {
+  const WalkerSimulator sim(kPerson);
+  WalkerState s;
+  s.q << -0.8, 0.0, -0.6, 0.0, -0.6;  // knees deeply bent, torso far forward, no springs
+  const AdvanceReport r = sim.advance(WalkerControls{}, s, 3.0);
+  EXPECT_TRUE(r.fell);
+  EXPECT_TRUE(s.fallen);
+  EXPECT_LT(r.elapsed, 3.0);
+  const WalkerState frozen = s;
+  EXPECT_TRUE(sim.advance(WalkerControls{}, s, 0.1).fell);
+  EXPECT_EQ(s.q, frozen.q);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::dynamics

@@ -1,0 +1,255 @@
+#include "kneed_walker/core/gait/gait_table.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include "shipped_config.h"
+
+namespace kneed_walker::core::gait {
+namespace {
+
+const std::string kShippedTable = std::string(KNEED_WALKER_SOURCE_DIR) + "/config/gait_table.yaml";
+
+
+const GaitTable& shipped() {
+  static const GaitTable table = loadGaitTable(kShippedTable, test::shippedWalkerModel());
+  return table;
+}
+
+// Both shipped tables: the free optimum (config/gait_table.yaml, issue 4) and the prior's,
+// optimised with the prior's fixed controls held (config/prior_gait_table.yaml).
+class ShippedGaitTable : public ::testing::TestWithParam<const char*> {
+ protected:
+  GaitTable table = loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/" + GetParam(), test::shippedWalkerModel());
+};
+
+TEST_P(ShippedGaitTable, CoversThePapersGrid) {
+  EXPECT_EQ(table.grid.speeds_kmh.size(), 9u);
+  EXPECT_EQ(table.grid.step_lengths_m.size(), 6u);
+  EXPECT_EQ(table.grid.slopes_rad.size(), 5u);
+  EXPECT_DOUBLE_EQ(table.grid.speeds_kmh.front(), 3.0);
+  EXPECT_DOUBLE_EQ(table.grid.speeds_kmh.back(), 7.0);
+  EXPECT_DOUBLE_EQ(table.grid.step_lengths_m.front(), 0.5);
+  EXPECT_DOUBLE_EQ(table.grid.step_lengths_m.back(), 1.0);
+  EXPECT_NEAR(table.grid.slopes_rad.back(), 4.3 * M_PI / 180, 1e-12);
+  int feasible = 0;
+  for (const auto& e : table.entries) feasible += e.feasible;
+  std::cout << feasible << " of " << table.grid.size() << " gaits feasible\n";
+  RecordProperty("feasible_gaits", feasible);
+  EXPECT_GT(feasible, 0);
+}
+
+// Every shipped gait is re-simulated from its stored state and controls: it must be periodic
+// and meet its speed and step length; the prior's gaits hold its fixed controls.
+TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
+  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
+  double worst_residual = 0, worst_speed = 0, worst_step = 0;
+  for (int i = 0; i < table.grid.size(); ++i) {
+    const GaitTableEntry& e = table.entries[i];
+    if (!e.feasible) continue;
+    const gait::GaitTarget target = table.grid.target(i);
+    EXPECT_NEAR(e.gait.target.speed, target.speed, 1e-12) << "gait " << i;
+    if (table.fixed) {
+      const dynamics::SpringParameters& springs = e.gait.controls.springs;
+      EXPECT_EQ(springs.stance_knee_damping, table.fixed->knee_damping) << "gait " << i;
+      EXPECT_EQ(springs.swing_knee_damping, table.fixed->knee_damping) << "gait " << i;
+      EXPECT_EQ(springs.swing_knee_stiffness, table.fixed->swing_knee_stiffness) << "gait " << i;
+      EXPECT_NEAR(springs.torso_rest_angle, table.fixed->torso_rest_per_slope * target.slope, 1e-15) << "gait " << i;
+      EXPECT_EQ(springs.torso_damping, table.fixed->torso_damping) << "gait " << i;
+    }
+    const dynamics::StrideResult stride = sim.stride(e.gait.controls, e.gait.start);
+    ASSERT_TRUE(stride.completed) << "gait " << i;
+    const double residual = std::max((stride.end.q - e.gait.start.q).lpNorm<Eigen::Infinity>(),
+                                     (stride.end.qdot - e.gait.start.qdot).lpNorm<Eigen::Infinity>());
+    worst_residual = std::max(worst_residual, residual);
+    worst_speed = std::max(worst_speed, std::abs(stride.speed / target.speed - 1));
+    worst_step = std::max(worst_step, std::abs(stride.step_length / target.step_length - 1));
+    EXPECT_LT(residual, 1e-6) << "gait " << i;
+    EXPECT_LT(std::abs(stride.speed / target.speed - 1), 0.01) << "gait " << i;
+    EXPECT_LT(std::abs(stride.step_length / target.step_length - 1), 0.01) << "gait " << i;
+  }
+  std::cout << "worst fixed-point residual " << worst_residual << ", speed error " << worst_speed
+            << ", step length error " << worst_step << "\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(Config, ShippedGaitTable,
+                         ::testing::Values("gait_table.yaml", "prior_gait_table.yaml"),
+                         [](const auto& info) { return std::string(info.param).substr(0, std::string(info.param).find('.')); });
+
+// Mean of f over the feasible gaits of one slope index whose (speed, step) partner at the
+// other slope is feasible too.
+template <typename F>
+std::pair<double, double> pairedMeans(const GaitTable& table, int slope_a, int slope_b, F f) {
+  double a = 0, b = 0;
+  int n = 0;
+  for (size_t v = 0; v < table.grid.speeds_kmh.size(); ++v)
+    for (size_t l = 0; l < table.grid.step_lengths_m.size(); ++l) {
+      const auto& ea = table.entries[table.grid.index(v, l, slope_a)];
+      const auto& eb = table.entries[table.grid.index(v, l, slope_b)];
+      if (!ea.feasible || !eb.feasible) continue;
+      a += f(ea.gait);
+      b += f(eb.gait);
+      ++n;
+    }
+  EXPECT_GT(n, 0) << "no (speed, step) with both slopes feasible";
+  return {a / std::max(n, 1), b / std::max(n, 1)};
+}
+
+// Paper §3.3, Fig. 2: the knee is more bent at contact uphill than downhill. At contact the
+// landing knee becomes the stance knee, so its flexion is that of x0's stance knee.
+TEST(GaitTable, KneeIsMoreBentAtContactUphillThanDownhill) {
+  const GaitTable& table = shipped();
+  const int down = 0, up = static_cast<int>(table.grid.slopes_rad.size()) - 1;
+  const auto [uphill, downhill] = pairedMeans(table, up, down, [](const Gait& g) {
+    return dynamics::kneeFlexion(g.start.q, 0);
+  });
+  std::cout << "mean knee flexion at contact: uphill " << uphill << " rad, downhill " << downhill
+            << " rad\n";
+  EXPECT_GT(uphill, downhill);
+}
+
+// Paper §3.3: "the stereotypical lean of the upper body can be seen, including a forward lean
+// when climbing up a hill and a slight backwards lean when walking down". Lean is measured
+// against gravity, as a picture shows it: an upright torso is at −γ in the walker's slope
+// frame, so the forward lean is −(φTo + γ), averaged over the stride.
+double meanForwardLean(const Gait& g) {
+  static const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(test::shippedWalkerModel()));
+  dynamics::WalkerState s = g.start;
+  const double dt = g.stride_duration / 40;
+  double sum = 0;
+  for (int k = 0; k < 40; ++k) {
+    sum += -(s.q[dynamics::kTorso] + g.target.slope);
+    sim.advance(g.controls, s, dt);
+  }
+  return sum / 40;
+}
+
+TEST(GaitTable, TorsoLeansFurtherForwardUphillThanOnTheLevel) {
+  const GaitTable& table = shipped();
+  const int level = static_cast<int>(table.grid.slopes_rad.size()) / 2;
+  const int up = static_cast<int>(table.grid.slopes_rad.size()) - 1;
+  const auto [uphill, flat] = pairedMeans(table, up, level, meanForwardLean);
+  std::cout << "mean forward lean of the torso from the vertical: uphill " << uphill << " rad, level "
+            << flat << " rad\n";
+  EXPECT_GT(uphill, flat);
+}
+
+TEST(GaitTable, TorsoLeansLessForwardDownhillThanOnTheLevel) {
+  const GaitTable& table = shipped();
+  const int level = static_cast<int>(table.grid.slopes_rad.size()) / 2;
+  const auto [downhill, flat] = pairedMeans(table, 0, level, meanForwardLean);
+  std::cout << "mean forward lean of the torso from the vertical: downhill " << downhill << " rad, level "
+            << flat << " rad\n";
+  EXPECT_LT(downhill, flat);
+}
+
+// Paper §3.3: the optimal swing-knee stiffness is small compared with the stance knee's.
+TEST(GaitTable, SwingKneeIsNearlyPassive) {
+  std::vector<double> swing, stance;
+  for (const auto& e : shipped().entries) {
+    if (!e.feasible) continue;
+    swing.push_back(e.gait.controls.springs.swing_knee_stiffness);
+    stance.push_back(e.gait.controls.springs.stance_knee_stiffness);
+  }
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  std::cout << "median stiffness: swing knee " << median(swing) << ", stance knee "
+            << median(stance) << " (M g L per rad)\n";
+  EXPECT_LT(median(swing), median(stance));
+}
+
+TEST(GaitTable, InterpolatesInsideTheGridAndRefusesOutside) {
+  const GaitTable& table = shipped();
+  const GaitGrid& g = table.grid;
+  // At a feasible grid point the interpolation is that gait.
+  for (int i = 0; i < g.size(); ++i) {
+    const auto& e = table.entries[i];
+    if (!e.feasible) continue;
+    const auto c = g.cell(i);
+    bool corners_feasible = true;  // the interpolation needs the cell's other corners too
+    for (int corner = 0; corner < 8; ++corner) {
+      const int v = std::min<int>(c[0] + (corner & 1), g.speeds_kmh.size() - 1);
+      const int l = std::min<int>(c[1] + ((corner >> 1) & 1), g.step_lengths_m.size() - 1);
+      const int s = std::min<int>(c[2] + ((corner >> 2) & 1), g.slopes_rad.size() - 1);
+      corners_feasible = corners_feasible && table.entries[g.index(v, l, s)].feasible;
+    }
+    if (!corners_feasible) continue;
+    const Gait at = interpolateGait(table, g.speeds_kmh[c[0]], g.step_lengths_m[c[1]],
+                                           g.slopes_rad[c[2]]);
+    EXPECT_NEAR((at.start.q - e.gait.start.q).norm(), 0, 1e-12);
+    EXPECT_NEAR(at.controls.springs.hip_stiffness, e.gait.controls.springs.hip_stiffness, 1e-12);
+    break;
+  }
+  try {
+    interpolateGait(table, 9.0, 0.7, 0.0);
+    FAIL() << "9 km/h accepted";
+  } catch (const std::out_of_range& e) {
+    EXPECT_NE(std::string(e.what()).find("speed 9 km/h is outside"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(interpolateGait(table, 5.0, 1.2, 0.0), std::out_of_range);
+  EXPECT_THROW(interpolateGait(table, 5.0, 0.7, 0.2), std::out_of_range);
+}
+
+// Of two runs, the lower effort wins per grid point; a feasible gait beats none; tables of
+// other grids or other fixed controls are refused.
+TEST(GaitTable, KeepsTheLowerEffortOfTwoRuns) {
+  GaitTable table = shipped(), other = shipped();
+  int first = -1, second = -1;
+  for (int i = 1; i < table.grid.size() && second < 0; ++i)
+    if (table.entries[i].feasible) (first < 0 ? first : second) = i;
+  other.entries[first].quality.effort -= 1.0;    // better in the other run
+  other.entries[second].quality.effort += 1.0;   // worse in the other run
+  table.entries[0].feasible = false;          // missing here, present there (if feasible)
+  const bool zero_feasible = other.entries[0].feasible;
+  EXPECT_EQ(keepLowerEffort(table, other), 1 + (zero_feasible ? 1 : 0));
+  EXPECT_EQ(table.entries[first].quality.effort, other.entries[first].quality.effort);
+  EXPECT_EQ(table.entries[second].quality.effort, shipped().entries[second].quality.effort);
+  other.grid.slopes_rad.back() += 0.01;
+  EXPECT_THROW(keepLowerEffort(table, other), std::invalid_argument);
+  EXPECT_THROW(keepLowerEffort(table, loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior_gait_table.yaml", test::shippedWalkerModel())),
+               std::invalid_argument);
+}
+
+TEST(GaitTable, SavesAndLoadsLosslessly) {
+  const std::string path = testing::TempDir() + "gait_table_round_trip.yaml";
+  saveGaitTable(path, shipped());
+  const GaitTable back = loadGaitTable(path, test::shippedWalkerModel());
+  ASSERT_EQ(back.entries.size(), shipped().entries.size());
+  for (size_t i = 0; i < back.entries.size(); ++i) {
+    EXPECT_EQ(back.entries[i].feasible, shipped().entries[i].feasible);
+    if (!back.entries[i].solved) continue;
+    EXPECT_EQ(back.entries[i].gait.start.q, shipped().entries[i].gait.start.q) << i;
+    EXPECT_EQ(back.entries[i].gait.controls.springs.torso_damping,
+              shipped().entries[i].gait.controls.springs.torso_damping);
+  }
+  std::remove(path.c_str());
+}
+
+TEST(GaitTable, MalformedTablesAreRefusedWithTheReason) {
+  const std::string path = testing::TempDir() + "bad_gait_table.yaml";
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs("%YAML:1.0\nreference_height_m: 1.75\nbody_model: {}\ngravity: 9.81\n"
+               "speeds_kmh: [3, 5]\nstep_lengths_m: [0.7, 0.5]\nslopes_rad: [0, 0.1]\ngaits: []\n",
+               f);
+    std::fclose(f);
+  }
+  try {
+    loadGaitTable(path, test::shippedWalkerModel());
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("step_lengths_m must hold at least two ascending"),
+              std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
+  EXPECT_THROW(loadGaitTable(path, test::shippedWalkerModel()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::gait

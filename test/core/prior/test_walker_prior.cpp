@@ -1,0 +1,226 @@
+#include "kneed_walker/core/prior/walker_prior.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "kneed_walker/core/gait/gait_table.h"
+#include "shipped_config.h"
+
+namespace kneed_walker::core::prior {
+namespace {
+
+const std::string kTable = std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior_gait_table.yaml";
+
+
+struct Fixture {
+  Fixture() : sim(dynamics::dimensionlessWalker(test::shippedWalkerModel())) {
+    const gait::GaitTable table = gait::loadGaitTable(kTable, test::shippedWalkerModel());
+    gait = gait::interpolateGait(table, 4.5, 0.7, 0.0);
+    gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
+  }
+  dynamics::WalkerSimulator sim;
+  gait::Gait gait;
+};
+
+TEST(WalkerPrior, SameSeedSameParticles) {
+  const Fixture f;
+  const WalkerPrior prior(f.sim, f.gait, PriorOptions{});
+  auto run = [&](unsigned seed) {
+    common::Random random(seed);
+    WalkerParticle p = prior.sample(0.3, random);
+    for (int i = 0; i < 60; ++i) prior.transition(p, 0.1, random);
+    return p;
+  };
+  const WalkerParticle a = run(7), b = run(7), c = run(8);
+  EXPECT_EQ(a.walker.q, b.walker.q);
+  EXPECT_EQ(a.noise, b.noise);
+  EXPECT_EQ(a.stiffness, b.stiffness);
+  EXPECT_NE(a.walker.q, c.walker.q) << "another seed, another particle";
+}
+
+TEST(WalkerPrior, ControlsCarryThePapersFixedValues) {
+  const Fixture f;
+  const WalkerPrior prior(f.sim, f.gait, PriorOptions{});
+  common::Random random(1);
+  const dynamics::WalkerControls c = prior.controls(prior.sample(0.0, random));
+  EXPECT_DOUBLE_EQ(c.springs.stance_knee_damping, 0.05);
+  EXPECT_DOUBLE_EQ(c.springs.swing_knee_damping, 0.05);
+  EXPECT_DOUBLE_EQ(c.springs.swing_knee_stiffness, 0.0);
+  EXPECT_DOUBLE_EQ(c.springs.torso_damping, 1.5);
+  EXPECT_DOUBLE_EQ(c.springs.torso_rest_angle, f.gait.target.slope / 3);
+}
+
+TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {
+  const Fixture f;
+  PriorOptions options;
+  const WalkerPrior prior(f.sim, f.gait, options);
+  common::Random random(3);
+  const int n = 20000;
+  const double optimal_impulse = f.gait.controls.toe_off_impulse;
+  ASSERT_GT(optimal_impulse, options.impulse_scale) << "so that the clip at 0 never acts";
+  double impulse_sum = 0, hip_sum = 0, knee_sum = 0, lowest_impulse = 1e9;
+  for (int i = 0; i < n; ++i) {
+    const WalkerParticle p = prior.sample(0.0, random);
+    impulse_sum += p.next_impulse;
+    lowest_impulse = std::min(lowest_impulse, p.next_impulse);
+    hip_sum += p.stride_mean[kPriorHip];
+    knee_sum += p.stride_mean[kPriorStanceKnee];
+  }
+  // ι* + Exponential(mean 0.015) − 0.015: mean ι*, standard error 0.015 / √n ≈ 1e-4, and
+  // never below ι* − 0.015.
+  EXPECT_NEAR(impulse_sum / n, optimal_impulse, 6e-4);
+  EXPECT_GE(lowest_impulse, optimal_impulse - options.impulse_scale);
+  EXPECT_LT(lowest_impulse, optimal_impulse - 0.99 * options.impulse_scale);
+  EXPECT_NEAR(hip_sum / n, f.gait.controls.springs.hip_stiffness, 6 * options.stride_sd[kPriorHip] / std::sqrt(n) + 1e-3);
+  // The stance knee's mean is raised by its offset (clipped at 0, which lifts the mean by
+  // at most 0.02 here: the level gait's knee stiffness is near 0).
+  EXPECT_NEAR(knee_sum / n,
+              f.gait.controls.springs.stance_knee_stiffness + options.stride_mean_offset[kPriorStanceKnee], 0.03);
+}
+
+// Eq. 11 with α = 0 is white Cauchy noise of scale s: the median of |η| is s.
+TEST(WalkerPrior, TorqueNoiseIsCauchyWithItsScale) {
+  const Fixture f;
+  PriorOptions options;
+  options.noise_decay.fill(0.0);
+  options.noise_scale = {0.01, 0.0, 0.0, 0.0, 0.0};
+  const WalkerPrior prior(f.sim, f.gait, options);
+  common::Random random(4);
+  WalkerParticle p = prior.sample(0.0, random);
+  std::vector<double> magnitudes;
+  for (int i = 0; i < 4000; ++i) {
+    prior.transition(p, 1e-3, random);
+    magnitudes.push_back(std::abs(p.noise[dynamics::kStanceKnee]));
+    EXPECT_EQ(p.noise[dynamics::kHip], 0.0);
+  }
+  // The median of |ε| for a Cauchy truncated at ±20 is tan(atan(20) / 2) = 0.951.
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + 2000, magnitudes.end());
+  EXPECT_NEAR(magnitudes[2000], 0.01 * std::tan(std::atan(20.0) / 2), 0.0006);
+  const double largest = *std::max_element(magnitudes.begin(), magnitudes.end());
+  EXPECT_LE(largest, 0.01 * options.noise_innovation_limit);
+  EXPECT_GT(largest, 0.01 * 0.5 * options.noise_innovation_limit) << "the tail is still heavy";
+}
+
+// Acceptance (issue 5): of 1000 strides sampled from the level optimal gait with the shipped
+// prior, at 30 frames per second, at least 99 % end in a heel strike rather than a fall. In
+// chains of 10 strides errors build up (the optimal gaits are unstable cycles: measured 91 %);
+// the floor of 85 % there guards against regressions.
+TEST(WalkerPrior, SampledStridesKeepWalking) {
+  const Fixture f;
+  const WalkerPrior prior(f.sim, f.gait, loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml"));
+  const double dt = (1.0 / 30) / std::sqrt(0.53 * 1.75 / 9.81);  // natural time units
+  common::Random random(1);
+  const WalkingFraction single = sampleStrides(prior, 1000, 1, dt, random);
+  EXPECT_EQ(single.walked + single.fell, 1000);
+  EXPECT_GE(single.fraction(), 0.99) << single.fell << " falls";
+  const WalkingFraction chained = sampleStrides(prior, 1000, 10, dt, random);
+  std::cout << "walking fraction " << single.fraction() << " of single strides, " << chained.fraction()
+            << " in chains of 10\n";
+  EXPECT_GE(chained.fraction(), 0.85) << chained.fell << " falls";
+}
+
+// Without a prior that perturbs, nothing falls; with ten times the hip noise, many strides do:
+// the count can fail.
+TEST(WalkerPrior, WalkingFractionFallsWithTooMuchNoise) {
+  const Fixture f;
+  PriorOptions noisy;
+  noisy.noise_scale[dynamics::kHip] = 0.002;
+  const double dt = 0.1;
+  common::Random random(2);
+  EXPECT_LT(sampleStrides(WalkerPrior(f.sim, f.gait, noisy), 300, 1, dt, random).fraction(), 0.95);
+}
+
+// The placement processes: turning keeps the pivot (the stance foot) in place, the sway stays
+// near zero, and with no noise nothing moves.
+TEST(WalkerPrior, PlacementProcessesTurnAboutTheStanceFoot) {
+  common::Random random(9);
+  PlacementState state;
+  state.value.ground_origin_m = {1.0, 2.0};
+  const double pivot = 3.0;  // metres along the heading
+  auto pivotPoint = [&] {
+    return Eigen::Vector2d(state.value.ground_origin_m +
+                           pivot * Eigen::Vector2d(std::cos(state.value.heading_rad),
+                                                   std::sin(state.value.heading_rad)));
+  };
+  const Eigen::Vector2d start = pivotPoint();
+  double max_sway = 0;
+  const PlacementNoise noise;
+  for (int i = 0; i < 3000; ++i) {
+    stepPlacement(state, noise, 1.0 / 30, pivot, random);
+    max_sway = std::max(max_sway, std::abs(state.value.sway_m));
+  }
+  EXPECT_NEAR((pivotPoint() - start).norm(), 0.0, 1e-9);
+  EXPECT_GT(std::abs(state.value.heading_rad), 1e-3) << "the heading wanders";
+  EXPECT_LT(max_sway, 0.2) << "the sway is held near the walking line";
+
+  PlacementState still;
+  stepPlacement(still, PlacementNoise{0, 0, 0, 0, 0, 0, 0, 0, 0}, 0.1, pivot, random);
+  EXPECT_EQ(still.value.heading_rad, 0.0);
+  EXPECT_EQ(still.value.ground_origin_m, Eigen::Vector2d::Zero());
+}
+
+TEST(WalkerPrior, ShippedConfigLoadsAndMatchesTheDefaults) {
+  const PriorOptions loaded =
+      loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml");
+  const PriorOptions defaults;
+  EXPECT_DOUBLE_EQ(loaded.fixed.knee_damping, defaults.fixed.knee_damping);
+  EXPECT_DOUBLE_EQ(loaded.fixed.torso_rest_per_slope, defaults.fixed.torso_rest_per_slope);
+  EXPECT_DOUBLE_EQ(loaded.impulse_scale, defaults.impulse_scale);
+  EXPECT_EQ(loaded.stride_mean_offset, defaults.stride_mean_offset);
+  EXPECT_EQ(loaded.stride_sd, defaults.stride_sd);
+  EXPECT_EQ(loaded.noise_scale, defaults.noise_scale);
+  EXPECT_DOUBLE_EQ(loaded.placement.sway_restoring, defaults.placement.sway_restoring);
+  EXPECT_DOUBLE_EQ(loaded.placement.rotation_sigma, defaults.placement.rotation_sigma);
+}
+
+TEST(WalkerPrior, BadConfigIsRefusedNamingEachProblem) {
+  const std::string path = testing::TempDir() + "bad_prior.yaml";
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs("%YAML:1.0\nknee_damping: soft\nnoise_scale: [1, 2]\nimpulse: 0.1\n", f);
+    std::fclose(f);
+  }
+  try {
+    loadPriorOptions(path);
+    FAIL() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("knee_damping must be a number"), std::string::npos) << what;
+    EXPECT_NE(what.find("noise_scale must list 5 numbers"), std::string::npos) << what;
+    EXPECT_NE(what.find("impulse is not a known key"), std::string::npos) << what;
+  }
+  std::remove(path.c_str());
+}
+
+// The prior refuses a table optimised without its fixed controls, or with other values.
+TEST(WalkerPrior, RefusesATableOptimisedWithoutItsFixedControls) {
+  const PriorOptions options;
+  EXPECT_NO_THROW(requirePriorTable(gait::loadGaitTable(kTable, test::shippedWalkerModel()), options));
+  EXPECT_THROW(requirePriorTable(gait::loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/gait_table.yaml", test::shippedWalkerModel()), options),
+               std::invalid_argument);
+  PriorOptions other;
+  other.fixed.torso_damping = 2.0;
+  try {
+    requirePriorTable(gait::loadGaitTable(kTable, test::shippedWalkerModel()), other);
+    FAIL() << "a different torso damping was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("torso_damping 2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(WalkerPrior, BadOptionsAreRefusedNamingTheField) {
+  PriorOptions options;
+  options.noise_decay[2] = 1.5;
+  options.fixed.knee_damping = -1;
+  const auto problems = validate(options);
+  ASSERT_EQ(problems.size(), 2u);
+  EXPECT_NE(problems[0].find("knee_damping"), std::string::npos);
+  EXPECT_NE(problems[1].find("noise_decay[2]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::prior

@@ -1,0 +1,57 @@
+#include "kneed_walker/core/tracking/tracker_options.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace kneed_walker::core::tracking {
+namespace {
+
+TEST(TrackerOptions, DefaultsAreThePapersAndValid) {
+  const TrackerOptions options;
+  EXPECT_TRUE(validate(options).empty());
+  EXPECT_EQ(options.num_particles, 5000);
+  EXPECT_DOUBLE_EQ(options.resample_ess_threshold, 500.0);
+  EXPECT_EQ(options.resample_lag_frames, 3);
+  EXPECT_DOUBLE_EQ(options.resample_mixing, 0.95);
+}
+
+// True when one of the problems mentions `text`.
+bool mentions(const std::vector<std::string>& problems, const std::string& text) {
+  for (const auto& problem : problems)
+    if (problem.find(text) != std::string::npos) return true;
+  return false;
+}
+
+TEST(TrackerOptions, EachProblemNamesItsField) {
+  TrackerOptions options;
+  options.num_threads = -2;
+  options.resample_mixing = 1.5;
+  options.person_height_m = std::numeric_limits<double>::quiet_NaN();
+  const auto problems = validate(options);
+  EXPECT_EQ(problems.size(), 3u);
+  EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
+  EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
+  EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
+}
+
+TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {
+  TrackerOptions options;
+  options.num_particles = 100;
+  options.resample_ess_threshold = 500;
+  const auto problems = validate(options);
+  EXPECT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(mentions(problems, "resample_ess_threshold = 500"));
+}
+
+TEST(TrackerOptions, FrameGapMustExceedDefaultInterval) {
+  TrackerOptions options;
+  options.default_frame_interval_s = 0.5;
+  options.max_frame_gap_s = 0.2;
+  const auto problems = validate(options);
+  EXPECT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(mentions(problems, "max_frame_gap_s = 0.2"));
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::tracking

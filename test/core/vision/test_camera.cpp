@@ -1,0 +1,166 @@
+#include "kneed_walker/core/vision/camera.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace kneed_walker::core::vision {
+namespace {
+
+const std::string kPets = std::string(KNEED_WALKER_SHARED_DIR) + "/data/pets2009";
+
+Camera petsCamera() { return Camera::load(kPets + "/View_001_camera.yml", 0.001); }
+
+// cv::projectPoints of one world point, as the reference.
+Eigen::Vector2d openCvProjection(const Camera& camera, const Eigen::Vector3d& world) {
+  cv::Mat r, k;
+  cv::eigen2cv(Eigen::Matrix3d(camera.rotation()), r);
+  cv::eigen2cv(Eigen::Matrix3d(camera.intrinsics()), k);
+  cv::Mat rvec;
+  cv::Rodrigues(r, rvec);
+  const cv::Vec3d tvec(camera.translation().x(), camera.translation().y(), camera.translation().z());
+  std::vector<cv::Point3d> in{{world.x(), world.y(), world.z()}};
+  std::vector<cv::Point2d> out;
+  cv::projectPoints(in, rvec, tvec, k, cv::Mat(camera.distortion()), out);
+  return {out[0].x, out[0].y};
+}
+
+void expectAgreesWithOpenCv(const Camera& camera, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> x(-15, 15), y(-15, 15), z(0, 2.5);
+  int visible = 0;
+  double worst = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d p(x(rng), y(rng), z(rng));
+    const auto pixel = camera.project(p);
+    if (!pixel) continue;
+    const Eigen::Vector2d reference = openCvProjection(camera, p);
+    if (reference.x() < -200 || reference.x() > camera.width() + 200 || reference.y() < -200 ||
+        reference.y() > camera.height() + 200)
+      continue;  // far outside the image the polynomial is not a lens any more
+    ++visible;
+    worst = std::max(worst, (*pixel - reference).norm());
+  }
+  std::cout << visible << " points in view, worst difference " << worst << " px\n";
+  EXPECT_GT(visible, 200);
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(Camera, ProjectionAgreesWithOpenCvOnThePetsCalibration) {
+  const Camera camera = petsCamera();
+  EXPECT_EQ(camera.width(), 768);
+  EXPECT_EQ(camera.height(), 576);
+  EXPECT_GT(camera.centre().z(), 5.0) << "the PETS camera is about 6.7 m up";
+  EXPECT_LT(camera.centre().z(), 9.0);
+  expectAgreesWithOpenCv(camera, 1);
+}
+
+TEST(Camera, ProjectionAgreesWithOpenCvForTheRationalModel) {
+  const Camera pets = petsCamera();
+  const Camera rational(pets.intrinsics(), {-0.2, 0.05, 0.001, -0.002, 0.01, 0.02, -0.01, 0.003},
+                        pets.rotation(), pets.translation(), 768, 576);
+  expectAgreesWithOpenCv(rational, 2);
+}
+
+TEST(Camera, GroundPointInvertsProjection) {
+  const Camera camera = petsCamera();
+  for (const Eigen::Vector2d pixel : {Eigen::Vector2d(100, 500), Eigen::Vector2d(400, 300),
+                                      Eigen::Vector2d(700, 450)}) {
+    const auto ground = camera.groundPoint(pixel);
+    ASSERT_TRUE(ground) << pixel.transpose();
+    EXPECT_NEAR(ground->z(), 0.0, 1e-9);
+    const auto back = camera.project(*ground);
+    ASSERT_TRUE(back);
+    EXPECT_LT((*back - pixel).norm(), 1e-6) << pixel.transpose();
+  }
+  EXPECT_FALSE(camera.project(camera.centre() - 5 * camera.rotation().row(2).transpose()))
+      << "a point behind the camera has no pixel";
+}
+
+// The calibration's units and pose, checked on the data: a 1.75 m pole standing at the foot
+// of a detected person (bottom centre of the box) spans about the box's height.
+TEST(Camera, PersonBoxesHaveHumanHeightsOnTheGround) {
+  const Camera camera = petsCamera();
+  std::ifstream boxes(kPets + "/View_001_person_boxes.csv");
+  ASSERT_TRUE(boxes) << "missing " << kPets << "/View_001_person_boxes.csv";
+  std::string line;
+  std::getline(boxes, line);
+  std::vector<double> ratios;
+  while (std::getline(boxes, line)) {
+    std::stringstream row(line);
+    double v[8];
+    char comma;
+    row >> v[0];
+    for (int i = 1; i < 8; ++i) row >> comma >> v[i];
+    const double frame = v[0], x1 = v[1], y1 = v[2], x2 = v[3], y2 = v[4], score = v[5];
+    if (frame < 600 || frame > 640 || score < 0.95 || y2 > 570) continue;  // the largest walker
+    const auto foot = camera.groundPoint({0.5 * (x1 + x2), y2});
+    if (!foot) continue;
+    const auto head = camera.project(*foot + Eigen::Vector3d(0, 0, 1.75));
+    if (!head) continue;
+    ratios.push_back((y2 - head->y()) / (y2 - y1));
+  }
+  ASSERT_GT(ratios.size(), 20u);
+  std::sort(ratios.begin(), ratios.end());
+  const double median = ratios[ratios.size() / 2];
+  std::cout << ratios.size() << " boxes: median projected-pole / box height " << median << "\n";
+  EXPECT_GT(median, 0.85);
+  EXPECT_LT(median, 1.2);
+}
+
+// save() then load() gives the same camera, in any file unit.
+TEST(Camera, SavedCalibrationLoadsBack) {
+  const Camera pets = petsCamera();
+  const std::string path = ::testing::TempDir() + "/kneed_walker_saved_camera.yml";
+  pets.save(path, 0.001);
+  const Camera loaded = Camera::load(path, 0.001);
+  EXPECT_EQ(loaded.intrinsics(), pets.intrinsics());
+  EXPECT_EQ(loaded.distortion(), pets.distortion());
+  EXPECT_EQ(loaded.rotation(), pets.rotation());
+  EXPECT_LT((loaded.translation() - pets.translation()).norm(), 1e-12);
+  EXPECT_EQ(loaded.width(), 768);
+  EXPECT_EQ(loaded.height(), 576);
+  std::remove(path.c_str());
+}
+
+// Batched rays agree with projection: a point along a pixel's ray projects to that pixel.
+TEST(Camera, RaysInvertProjection) {
+  const Camera pets = petsCamera();
+  const std::vector<Eigen::Vector2d> pixels{{10, 20}, {384, 288}, {700, 550}};
+  const std::vector<Eigen::Vector3d> rays = pets.rays(pixels);
+  ASSERT_EQ(rays.size(), pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const auto back = pets.project(pets.centre() + 20.0 * rays[i].normalized());
+    ASSERT_TRUE(back.has_value());
+    EXPECT_LT((*back - pixels[i]).norm(), 1e-6);
+  }
+}
+
+TEST(Camera, BadCalibrationsAreRefusedWithTheReason) {
+  const Camera pets = petsCamera();
+  EXPECT_THROW(Camera(pets.intrinsics(), {0.1, 0.2, 0.3}, pets.rotation(), pets.translation(), 768,
+                      576),
+               std::invalid_argument);
+  Eigen::Matrix3d not_rotation = pets.rotation();
+  not_rotation(0, 0) += 0.1;
+  EXPECT_THROW(Camera(pets.intrinsics(), {}, not_rotation, pets.translation(), 768, 576),
+               std::invalid_argument);
+  Eigen::Matrix3d skewed = pets.intrinsics();
+  skewed(0, 1) = 2;
+  try {
+    Camera(skewed, {}, pets.rotation(), pets.translation(), 768, 576);
+    FAIL() << "skew accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no skew"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(Camera::load(kPets + "/missing.yml", 0.001), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::vision
