@@ -14,7 +14,7 @@
 //
 //   rosrun kneed_walker make_synthetic --camera ../shared/data/pets2009/View_001_camera.yml
 //       --background ../shared/data/pets2009/vtest.avi --out-dir /tmp/synthetic  (one line)
-//   rosrun kneed_walker make_synthetic --config test/sequences/level_4kmh.ini --out-dir DIR
+//   rosrun kneed_walker make_synthetic --config test/sequences/level_slow.ini --out-dir DIR
 #include <CLI/CLI.hpp>
 #include <boost/make_shared.hpp>
 #include <cv_bridge/cv_bridge.h>

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+
 #include "shipped_config.h"
 
 namespace kneed_walker::core::gait {

@@ -64,7 +64,7 @@ PeriodicGait findPeriodicGait(const dynamics::WalkerSimulator& simulator, const 
 constexpr double kMcGeerSlope = -0.0456;
 
 // McGeer's passive kneed walker's periodic gait down kMcGeerSlope, in dimensionless units:
-// a ready-made walking motion (for benchmarks and pictures) until optimal gaits exist.
+// a ready-made walking motion of the bare legs (for benchmarks, pictures and physics checks).
 PeriodicGait mcGeerPassiveGait();
 
 // A dimensionless state (leg length 1, g = 1) for a walker of another size: angles unchanged,
