@@ -1,0 +1,267 @@
+// The particle filter of paper §4 ("Inference"), generic over the state: a weighted set of state
+// sequences, propagated by the prior and weighted by the likelihood, resampled when the
+// effective sample size N_eff = 1 / Σ w² falls below a threshold. Resampling is from time
+// t − Δs, with a proposal that mixes the weights at t (probability γ) and at t − Δs, and
+// importance re-weighting w ∝ w_{t−Δs} / (γ W_t + (1 − γ) w_{t−Δs}), W_t the weight at t of a
+// particle's descendants (the paper, following Doucet et al.); the resampled particles are then
+// propagated again to t through the buffered frames.
+//
+// The model is two callbacks: transition(state, frame, random) advances a state from frame − 1
+// to `frame`; log_likelihood(state, frame) scores it against a buffered frame (the last Δs + 1
+// frames must stay available to it). Log-weights are doubles, normalised by log-sum-exp. Each
+// particle's ancestry through the buffer is kept, so that the MAP state sequence (the ancestry
+// of the best particle) is available, not only a per-frame mean.
+//
+// Deterministic for a seed on any number of threads: particles are processed in fixed chunks of
+// kChunk, each with its own generator seeded from (seed, frame, pass, chunk).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "kneed_walker/core/common/parallel.h"
+#include "kneed_walker/core/common/random.h"
+
+namespace kneed_walker::core::tracking {
+
+struct FilterOptions {
+  int num_particles = 5000;               // N
+  double resample_ess_threshold = 500.0;  // resample when N_eff falls below this
+  int resample_lag_frames = 3;            // Δs
+  double resample_mixing = 0.95;          // γ: weight of the time-t weights in the proposal
+  int num_threads = 0;                    // 0: all cores
+  std::uint64_t seed = 1;
+};
+
+// What one step did.
+struct FilterStepReport {
+  double effective_sample_size = 0;  // N_eff after the step (after resampling, if any)
+  double ess_before_resampling = 0;  // N_eff of the weights at t before any resampling
+  bool resampled = false;
+  int resampled_from_frame = -1;     // t − Δs (or the oldest buffered frame)
+  double max_log_likelihood = 0;     // of the frame's new observation, over the particles
+};
+
+// A 64-bit mix of several integers (SplitMix64 steps): the seed of one chunk's generator.
+std::uint64_t mixSeed(std::uint64_t seed, std::uint64_t frame, std::uint64_t pass, std::uint64_t chunk);
+
+// log Σ exp(x_i) without overflow; −inf for an empty or all −inf input.
+double logSumExp(const std::vector<double>& x);
+
+template <class State>
+class ParticleFilter {
+ public:
+  using Transition = std::function<void(State& state, int frame, common::Random& random)>;
+  using LogLikelihood = std::function<double(const State& state, int frame)>;
+  static constexpr int kChunk = 64;
+
+  explicit ParticleFilter(const FilterOptions& options) : options_(options) {
+    if (options.num_particles < 1) throw std::invalid_argument("num_particles must be >= 1");
+    if (!(options.resample_ess_threshold > 0 && options.resample_ess_threshold <= options.num_particles))
+      throw std::invalid_argument("resample_ess_threshold must lie in (0, num_particles]");
+    if (options.resample_lag_frames < 0) throw std::invalid_argument("resample_lag_frames must be >= 0");
+    if (!(options.resample_mixing >= 0 && options.resample_mixing <= 1))
+      throw std::invalid_argument("resample_mixing must lie in [0, 1]");
+  }
+
+  // Draws the particles of the first frame from `sample` and weighs them by that frame.
+  FilterStepReport initialize(const std::function<State(common::Random&)>& sample,
+                              const LogLikelihood& log_likelihood, int frame) {
+    sets_.clear();
+    Set set;
+    set.frame = frame;
+    set.states.resize(options_.num_particles);
+    set.log_weights.assign(options_.num_particles, 0.0);
+    set.ancestors.assign(options_.num_particles, -1);
+    forChunks(frame, 0, [&](int i, common::Random& random) {
+      set.states[i] = sample(random);
+      set.log_weights[i] = log_likelihood(set.states[i], frame);
+    });
+    FilterStepReport report;
+    report.max_log_likelihood = *std::max_element(set.log_weights.begin(), set.log_weights.end());
+    normalise(set.log_weights);
+    sets_.push_back(std::move(set));
+    report.effective_sample_size = report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
+    return report;
+  }
+
+  // Advances every particle to `frame` (the next frame after the last one) and weighs it.
+  FilterStepReport step(const Transition& transition, const LogLikelihood& log_likelihood, int frame) {
+    if (sets_.empty()) throw std::logic_error("ParticleFilter::step before initialize");
+    const Set& previous = sets_.back();
+    Set set;
+    set.frame = frame;
+    set.states = previous.states;
+    set.log_weights.resize(previous.states.size());
+    set.ancestors.resize(previous.states.size());
+    std::vector<double> likelihoods(previous.states.size());
+    forChunks(frame, 0, [&](int i, common::Random& random) {
+      transition(set.states[i], frame, random);
+      likelihoods[i] = log_likelihood(set.states[i], frame);
+      set.log_weights[i] = previous.log_weights[i] + likelihoods[i];
+      set.ancestors[i] = i;
+    });
+    FilterStepReport report;
+    report.max_log_likelihood = *std::max_element(likelihoods.begin(), likelihoods.end());
+    normalise(set.log_weights);
+    sets_.push_back(std::move(set));
+    while (static_cast<int>(sets_.size()) > options_.resample_lag_frames + 1) sets_.pop_front();
+    report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
+    if (report.ess_before_resampling < options_.resample_ess_threshold) {
+      resample(transition, log_likelihood, report);
+      report.resampled = true;
+    }
+    report.effective_sample_size = effectiveSampleSize(sets_.back().log_weights);
+    return report;
+  }
+
+  // The particles at the newest frame and their normalised log-weights.
+  const std::vector<State>& states() const { return sets_.back().states; }
+  const std::vector<double>& logWeights() const { return sets_.back().log_weights; }
+  int frame() const { return sets_.back().frame; }
+  int best() const {
+    const auto& w = sets_.back().log_weights;
+    return static_cast<int>(std::max_element(w.begin(), w.end()) - w.begin());
+  }
+  // The MAP state sequence over the buffered frames, oldest first: the ancestry of the best
+  // particle at the newest frame. `frames` receives their frame numbers.
+  std::vector<State> mapSequence(std::vector<int>* frames = nullptr) const {
+    std::vector<State> sequence(sets_.size());
+    if (frames) frames->resize(sets_.size());
+    int index = best();
+    for (int s = static_cast<int>(sets_.size()) - 1; s >= 0; --s) {
+      sequence[s] = sets_[s].states[index];
+      if (frames) (*frames)[s] = sets_[s].frame;
+      index = sets_[s].ancestors[index];
+      if (index < 0 && s > 0) throw std::logic_error("broken ancestry");
+    }
+    return sequence;
+  }
+  const FilterOptions& options() const { return options_; }
+
+  static double effectiveSampleSize(const std::vector<double>& normalised_log_weights) {
+    double sum = 0;
+    for (double lw : normalised_log_weights) sum += std::exp(2 * lw);
+    return sum > 0 ? 1.0 / sum : 0.0;
+  }
+
+ private:
+  struct Set {
+    int frame = 0;
+    std::vector<State> states;
+    std::vector<double> log_weights;  // normalised
+    std::vector<int> ancestors;       // index into the previous set; −1 for the first frame
+  };
+
+  // Calls f(i, random) for every particle, chunk by chunk, each chunk with its own generator.
+  template <class F>
+  void forChunks(int frame, std::uint64_t pass, F&& f) {
+    const int n = options_.num_particles;
+    const int chunks = (n + kChunk - 1) / kChunk;
+    common::parallelFor(chunks, options_.num_threads, [&](int begin, int end) {
+      for (int c = begin; c < end; ++c) {
+        common::Random random(mixSeed(options_.seed, static_cast<std::uint64_t>(frame),
+                                      static_cast<std::uint64_t>(pass), static_cast<std::uint64_t>(c)));
+        for (int i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) f(i, random);
+      }
+    }, 1);
+  }
+
+  static void normalise(std::vector<double>& log_weights) {
+    const double total = logSumExp(log_weights);
+    if (!std::isfinite(total)) {  // every particle impossible: start again from equal weights
+      std::fill(log_weights.begin(), log_weights.end(), -std::log(double(log_weights.size())));
+      return;
+    }
+    for (double& lw : log_weights) lw -= total;
+  }
+
+  // Systematic resampling of `count` indices from normalised probabilities.
+  static std::vector<int> systematic(const std::vector<double>& probabilities, int count, double u0) {
+    std::vector<int> indices(count);
+    double cumulative = probabilities[0];
+    int j = 0;
+    const int last = static_cast<int>(probabilities.size()) - 1;
+    for (int k = 0; k < count; ++k) {
+      const double u = (k + u0) / count;
+      while (u > cumulative && j < last) cumulative += probabilities[++j];
+      indices[k] = j;
+    }
+    return indices;
+  }
+
+  void resample(const Transition& transition, const LogLikelihood& log_likelihood,
+                FilterStepReport& report) {
+    const int n = options_.num_particles;
+    const int base = 0;  // the oldest buffered set: frame t − Δs (or the first frame)
+    const int last = static_cast<int>(sets_.size()) - 1;
+    report.resampled_from_frame = sets_[base].frame;
+    // W: each base particle's share of the weight at t (its descendants').
+    std::vector<double> descendants(n);
+    for (int i = 0; i < n; ++i) descendants[i] = std::exp(sets_[last].log_weights[i]);
+    for (int s = last; s > base; --s) {
+      std::vector<double> up(n, 0.0);
+      for (int i = 0; i < n; ++i) up[sets_[s].ancestors[i]] += descendants[i];
+      descendants.swap(up);
+    }
+    const double gamma = options_.resample_mixing;
+    std::vector<double> proposal(n), base_weights(n);
+    for (int j = 0; j < n; ++j) {
+      base_weights[j] = std::exp(sets_[base].log_weights[j]);
+      proposal[j] = gamma * descendants[j] + (1 - gamma) * base_weights[j];
+    }
+    const double proposal_sum = std::accumulate(proposal.begin(), proposal.end(), 0.0);
+    for (double& p : proposal) p /= proposal_sum;
+    // Each resampling draws fresh noise: its passes are told apart by the frame it happens at.
+    const std::uint64_t now = static_cast<std::uint64_t>(sets_[last].frame);
+    common::Random random(mixSeed(options_.seed, now, 2 * now + 2, 0));
+    const std::vector<int> picked =
+        systematic(proposal, n, std::uniform_real_distribution<double>(0.0, 1.0)(random));
+
+    // The resampled particles at the base frame, re-weighted, then propagated again to t.
+    std::vector<State> states(n);
+    std::vector<double> log_weights(n);
+    for (int k = 0; k < n; ++k) {
+      states[k] = sets_[base].states[picked[k]];
+      log_weights[k] = base == last ? 0.0
+                                    : std::log(base_weights[picked[k]]) - std::log(proposal[picked[k]]);
+    }
+    if (base == last) {  // no lag buffered: plain resampling at t, equal weights
+      Set& set = sets_[last];
+      std::vector<int> ancestors(n);
+      for (int k = 0; k < n; ++k) ancestors[k] = set.ancestors[picked[k]];
+      set.states = std::move(states);
+      set.ancestors = std::move(ancestors);
+      set.log_weights.assign(n, -std::log(double(n)));
+      return;
+    }
+    for (int s = base + 1; s <= last; ++s) {
+      Set& set = sets_[s];
+      forChunks(set.frame, 2 * now + 1, [&](int i, common::Random& r) {
+        transition(states[i], set.frame, r);
+        log_weights[i] += log_likelihood(states[i], set.frame);
+      });
+      std::vector<double> normalised = log_weights;
+      normalise(normalised);
+      set.states = states;
+      set.log_weights = std::move(normalised);
+      if (s == base + 1)
+        set.ancestors = picked;
+      else
+        std::iota(set.ancestors.begin(), set.ancestors.end(), 0);
+    }
+  }
+
+  FilterOptions options_;
+  std::deque<Set> sets_;  // the last Δs + 1 frames, oldest first
+};
+
+}  // namespace kneed_walker::core::tracking
