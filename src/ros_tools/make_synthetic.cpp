@@ -85,8 +85,7 @@ void writeCameraAndGround(const std::string& path, const kw::vision::Camera& cam
   cv::FileStorage file(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
   if (!file.isOpened()) throw std::runtime_error(path + ": cannot write the calibration");
   camera.write(file, 0.001);
-  file << "ground_point_mm" << std::vector<double>{1000 * ground.point_m.x(), 1000 * ground.point_m.y()}
-       << "ground_slope_rad" << ground.slope_rad << "ground_uphill_heading_rad" << ground.uphill_heading_rad;
+  kw::vision::writeGroundPlane(file, ground);
 }
 
 // Pixel height of the person (head top to lowest foot) in a frame, for the summary.

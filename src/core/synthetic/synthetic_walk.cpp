@@ -1,5 +1,7 @@
 #include "kneed_walker/core/synthetic/synthetic_walk.h"
 
+#include "kneed_walker/core/prior/body_prior.h"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -47,52 +49,25 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
 
   prior::PriorOptions options = prior_options;
   if (o.slope_rad != 0) options.placement.heading_sigma = 0;  // the slope is one plane
-  const prior::WalkerPrior prior(sim, walk.gait, options);
-  const body::BodyShape shape = body::BodyShape::forHeight(o.person_height_m);
+  const prior::BodyPrior prior(prior::WalkerPrior(sim, walk.gait, options), o.person_height_m,
+                               table.grid.leg_length_per_height, table.grid.gravity);
   const double frame_s = 1.0 / o.fps;
-  const double dt = frame_s / std::sqrt(leg_length_m / table.grid.gravity);  // natural time
   const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;
-  const Eigen::Vector2d heading(std::cos(o.heading_rad), std::sin(o.heading_rad));
-  // XY distance along the heading of a walker length along the slope.
-  const double along_xy_m = leg_length_m * std::cos(o.slope_rad);
-  const double foot_radius_m = sim.model().foot_radius * leg_length_m;
 
   common::Random random(o.seed);
   std::uniform_real_distribution<double> phase(0.0, 1.0);
   for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
-    prior::WalkerParticle particle = prior.sample(phase(random), random);
-    prior::PlacementState placement;
-    placement.value.heading_rad = o.heading_rad;
-    const dynamics::Point foot = dynamics::stanceFootCentre(sim.map(), particle.walker.q, particle.walker.stance_foot_x);
-    placement.value.ground_origin_m = o.start_m - along_xy_m * foot.real() * heading;
-    walk.ground = vision::GroundPlane{placement.value.ground_origin_m, o.slope_rad, o.heading_rad};
+    SyntheticFrame frame;
+    prior::BodyParticle particle = prior.sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
+    walk.ground = vision::GroundPlane{particle.placement.value.ground_origin_m, o.slope_rad, o.heading_rad};
     walk.frames.clear();
     walk.frames.reserve(frame_count);
     bool fell = false;
     for (int i = 0; i < frame_count && !fell; ++i) {
-      if (i > 0) {
-        fell = prior.transition(particle, dt, random).fell;
-        const dynamics::Point stance =
-            dynamics::stanceFootCentre(sim.map(), particle.walker.q, particle.walker.stance_foot_x);
-        prior::stepPlacement(placement, options.placement, frame_s, along_xy_m * stance.real(), random);
-      }
-      SyntheticFrame frame;
+      if (i > 0) fell = prior.transition(particle, frame_s, random, frame.pose).fell;
       frame.time_s = i * frame_s;
-      frame.walker = particle.walker;
-      frame.pose = body::bodyPose(sim.map(), particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
-      if (i > 0 && particle.walker.heel_strikes == walk.frames.back().walker.heel_strikes) {
-        // The stance foot rolls without slipping (its centre moves by −R Δθ along the walk);
-        // what the placement processes (sway, turning, a turned-out leg) would make it slide
-        // moves the body over the foot instead.
-        const SyntheticFrame& previous = walk.frames.back();
-        const int side = particle.walker.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
-        const double turn = particle.walker.q[dynamics::kStanceShank] - previous.walker.q[dynamics::kStanceShank];
-        const Eigen::Vector3d rolled_to =
-            previous.pose.foot_centres[side] - foot_radius_m * turn * frame.pose.forward;
-        placement.value.ground_origin_m += (rolled_to - frame.pose.foot_centres[side]).head<2>();
-        frame.pose = body::bodyPose(sim.map(), particle.walker, o.slope_rad, placement.value, shape, leg_length_m);
-      }
-      frame.placement = placement.value;
+      frame.walker = particle.walker.walker;
+      frame.placement = particle.placement.value;
       walk.frames.push_back(frame);
     }
     if (!fell) return walk;

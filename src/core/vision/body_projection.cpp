@@ -94,6 +94,14 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
       }
     }
     outline.size = outline.visible ? convexHull(points, outline.hull) : 0;
+    if (outline.visible) {
+      for (int end = 0; end < 2; ++end) {
+        Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+        for (int i = 0; i < kOutlineSamples; ++i) sum += points[end * kOutlineSamples + i];
+        outline.ends_px[end] = sum / kOutlineSamples;
+      }
+      outline.depth_m = camera.depth(0.5 * (axes.proximal[p] + axes.distal[p]));
+    }
   }
 }
 

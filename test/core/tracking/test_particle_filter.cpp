@@ -61,12 +61,13 @@ struct FilterRun {
 };
 FilterRun run(const LinearGaussian& model, FilterOptions options) {
   ParticleFilter<double> filter(options);
-  auto transition = [&](double& x, int, common::Random& random) {
-    x = model.a * x + std::sqrt(model.q) * std::normal_distribution<double>(0, 1)(random);
-  };
-  auto likelihood = [&](const double& x, int frame) {
+  auto likelihood = [&](double& x, int frame) {
     const double e = model.observations[frame] - x;
     return -0.5 * e * e / model.r;
+  };
+  auto propagate = [&](double& x, int frame, common::Random& random) {
+    x = model.a * x + std::sqrt(model.q) * std::normal_distribution<double>(0, 1)(random);
+    return likelihood(x, frame);
   };
   filter.initialize([&](common::Random& random) {
     return model.x0_mean + std::sqrt(model.x0_var) * std::normal_distribution<double>(0, 1)(random);
@@ -74,7 +75,7 @@ FilterRun run(const LinearGaussian& model, FilterOptions options) {
   const auto exact = model.kalman();
   FilterRun result;
   for (int t = 0; t < static_cast<int>(model.observations.size()); ++t) {
-    if (t > 0) result.resamplings += filter.step(transition, likelihood, t).resampled;
+    if (t > 0) result.resamplings += filter.step(propagate, t).resampled;
     const auto [mean, variance] = weightedMoments(filter);
     const double ess = ParticleFilter<double>::effectiveSampleSize(filter.logWeights());
     const double mean_sd = std::abs(mean - exact[t].first) / std::sqrt(exact[t].second);
@@ -148,14 +149,15 @@ TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
   options.resample_ess_threshold = 150;
   options.resample_lag_frames = 3;
   ParticleFilter<History> filter(options);
-  auto likelihood = [](const History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
-  auto transition = [](History& h, int, common::Random& random) {
+  auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
+  auto propagate = [&](History& h, int frame, common::Random& random) {
     h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
+    return likelihood(h, frame);
   };
   filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
                     likelihood, 0);
   int resamplings = 0;
-  for (int t = 1; t <= 12; ++t) resamplings += filter.step(transition, likelihood, t).resampled;
+  for (int t = 1; t <= 12; ++t) resamplings += filter.step(propagate, t).resampled;
   EXPECT_GT(resamplings, 0);
   std::vector<int> frames;
   const std::vector<History> sequence = filter.mapSequence(&frames);

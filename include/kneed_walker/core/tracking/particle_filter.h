@@ -6,9 +6,10 @@
 // particle's descendants (the paper, following Doucet et al.); the resampled particles are then
 // propagated again to t through the buffered frames.
 //
-// The model is two callbacks: transition(state, frame, random) advances a state from frame − 1
-// to `frame`; log_likelihood(state, frame) scores it against a buffered frame (the last Δs + 1
-// frames must stay available to it). Log-weights are doubles, normalised by log-sum-exp. Each
+// The model is one callback, propagate(state, frame, random): it advances a state from frame − 1
+// to `frame` by the prior and returns log p(z_frame | state) (the last Δs + 1 frames must stay
+// available to it, for resampling); the state may cache what the next frame needs. The first
+// frame's particles come from sample(random) and are weighed by weigh(state, frame). Log-weights are doubles, normalised by log-sum-exp. Each
 // particle's ancestry through the buffer is kept, so that the MAP state sequence (the ancestry
 // of the best particle) is available, not only a per-frame mean.
 //
@@ -59,8 +60,8 @@ double logSumExp(const std::vector<double>& x);
 template <class State>
 class ParticleFilter {
  public:
-  using Transition = std::function<void(State& state, int frame, common::Random& random)>;
-  using LogLikelihood = std::function<double(const State& state, int frame)>;
+  using Propagate = std::function<double(State& state, int frame, common::Random& random)>;
+  using Weigh = std::function<double(State& state, int frame)>;
   static constexpr int kChunk = 64;
 
   explicit ParticleFilter(const FilterOptions& options) : options_(options) {
@@ -74,7 +75,7 @@ class ParticleFilter {
 
   // Draws the particles of the first frame from `sample` and weighs them by that frame.
   FilterStepReport initialize(const std::function<State(common::Random&)>& sample,
-                              const LogLikelihood& log_likelihood, int frame) {
+                              const Weigh& weigh, int frame) {
     sets_.clear();
     Set set;
     set.frame = frame;
@@ -83,7 +84,7 @@ class ParticleFilter {
     set.ancestors.assign(options_.num_particles, -1);
     forChunks(frame, 0, [&](int i, common::Random& random) {
       set.states[i] = sample(random);
-      set.log_weights[i] = log_likelihood(set.states[i], frame);
+      set.log_weights[i] = weigh(set.states[i], frame);
     });
     FilterStepReport report;
     report.max_log_likelihood = *std::max_element(set.log_weights.begin(), set.log_weights.end());
@@ -94,7 +95,7 @@ class ParticleFilter {
   }
 
   // Advances every particle to `frame` (the next frame after the last one) and weighs it.
-  FilterStepReport step(const Transition& transition, const LogLikelihood& log_likelihood, int frame) {
+  FilterStepReport step(const Propagate& propagate, int frame) {
     if (sets_.empty()) throw std::logic_error("ParticleFilter::step before initialize");
     const Set& previous = sets_.back();
     Set set;
@@ -104,8 +105,7 @@ class ParticleFilter {
     set.ancestors.resize(previous.states.size());
     std::vector<double> likelihoods(previous.states.size());
     forChunks(frame, 0, [&](int i, common::Random& random) {
-      transition(set.states[i], frame, random);
-      likelihoods[i] = log_likelihood(set.states[i], frame);
+      likelihoods[i] = propagate(set.states[i], frame, random);
       set.log_weights[i] = previous.log_weights[i] + likelihoods[i];
       set.ancestors[i] = i;
     });
@@ -116,7 +116,7 @@ class ParticleFilter {
     while (static_cast<int>(sets_.size()) > options_.resample_lag_frames + 1) sets_.pop_front();
     report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
     if (report.ess_before_resampling < options_.resample_ess_threshold) {
-      resample(transition, log_likelihood, report);
+      resample(propagate, report);
       report.resampled = true;
     }
     report.effective_sample_size = effectiveSampleSize(sets_.back().log_weights);
@@ -198,8 +198,7 @@ class ParticleFilter {
     return indices;
   }
 
-  void resample(const Transition& transition, const LogLikelihood& log_likelihood,
-                FilterStepReport& report) {
+  void resample(const Propagate& propagate, FilterStepReport& report) {
     const int n = options_.num_particles;
     const int base = 0;  // the oldest buffered set: frame t − Δs (or the first frame)
     const int last = static_cast<int>(sets_.size()) - 1;
@@ -246,8 +245,7 @@ class ParticleFilter {
     for (int s = base + 1; s <= last; ++s) {
       Set& set = sets_[s];
       forChunks(set.frame, 2 * now + 1, [&](int i, common::Random& r) {
-        transition(states[i], set.frame, r);
-        log_weights[i] += log_likelihood(states[i], set.frame);
+        log_weights[i] += propagate(states[i], set.frame, r);
       });
       std::vector<double> normalised = log_weights;
       normalise(normalised);

@@ -28,6 +28,8 @@ struct PartOutline {
   std::array<Eigen::Vector2d, 2 * kOutlineSamples> hull;  // first `size` points, in order
   int size = 0;
   bool visible = false;
+  std::array<Eigen::Vector2d, 2> ends_px;  // image of the proximal and distal centres (mean of each end's samples)
+  double depth_m = 0;                      // camera depth of the axis' midpoint: nearer parts occlude
 };
 using BodyOutlines = std::array<PartOutline, body::kNumBodyParts>;
 

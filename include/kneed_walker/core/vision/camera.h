@@ -38,6 +38,9 @@ class Camera {
   // particle, and agrees with cv::projectPoints to 1e-6 px (test_camera).
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& world_m) const;
 
+  // Depth of a world point along the optical axis (camera z), metres.
+  double depth(const Eigen::Vector3d& world_m) const { return rotation_.row(2).dot(world_m) + translation_.z(); }
+
   // The viewing rays of pixels: world-frame directions (not normalised) from centre(),
   // distortion undone. One call undistorts all pixels at once.
   std::vector<Eigen::Vector3d> rays(const std::vector<Eigen::Vector2d>& pixels) const;

@@ -3,6 +3,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <opencv2/core/persistence.hpp>
+
+#include <string>
 
 namespace kneed_walker::core::vision {
 
@@ -15,5 +18,12 @@ struct GroundPlane {
   double height(const Eigen::Vector2d& xy_m) const;  // Z of the ground at (X, Y), m
   Eigen::Vector3d normal() const;                     // unit, upwards
 };
+
+// The ground's keys in a calibration file, beside the camera's (make_synthetic writes them):
+// ground_point_mm (X, Y), ground_slope_rad, ground_uphill_heading_rad.
+void writeGroundPlane(cv::FileStorage& file, const GroundPlane& ground);
+// Reads them; a calibration without them means the level ground Z = 0. Throws
+// std::invalid_argument naming a bad key.
+GroundPlane loadGroundPlane(const std::string& path);
 
 }  // namespace kneed_walker::core::vision

@@ -1,0 +1,133 @@
+// The tracker (paper §4–5): frames of one calibrated static camera in, the MAP 3D pose of one
+// walking person out. A particle is the whole body's state (the walker, the prior's stride
+// variables, the placement DOFs) plus which optimal gait it walks around; the transition is the
+// body prior (prior/body_prior.h), the weight the image likelihood (vision/likelihood.h); the
+// particle filter (particle_filter.h) resamples from t − Δs. Everything the nodelet and
+// track_offline do goes through this class.
+//
+// World frame: the camera's (metres, Z up, REP 103); the ground is the given plane.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "kneed_walker/core/gait/gait_table.h"
+#include "kneed_walker/core/prior/body_prior.h"
+#include "kneed_walker/core/tracking/particle_filter.h"
+#include "kneed_walker/core/tracking/tracker_options.h"
+#include "kneed_walker/core/vision/camera.h"
+#include "kneed_walker/core/vision/ground_plane.h"
+#include "kneed_walker/core/vision/likelihood.h"
+
+namespace kneed_walker::core::tracking {
+
+// A coarse initial state, with a large spread (paper §5). Heading from +X towards +Y.
+struct InitialGuess {
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  // ground XY under the body
+  double position_sd_m = 0.25;
+  double heading_rad = 0;
+  double heading_sd_rad = 0.3;  // ≥ π: any heading
+  double min_speed_kmh = 3.0, max_speed_kmh = 6.0;  // the gaits the particles may walk
+};
+
+// A guess from a person's box in the image: the feet at the middle of the box's bottom edge on
+// the ground plane; heading unknown unless given. Throws std::invalid_argument when the box's
+// bottom does not see the ground.
+InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
+                          const cv::Rect2d& box_px);
+
+// One particle.
+struct TrackerParticle {
+  prior::BodyParticle body;
+  int gait = 0;                                   // index into the tracker's gait bank
+  vision::BodyImageAxes axes;                     // its parts' image axes at the last frame (for flow)
+  std::array<Eigen::Vector3f, body::kNumBodyJoints> joints;  // its joints at the last frame, world, m
+  float log_likelihood = 0;                       // of the last frame
+};
+
+struct TrackEstimate {
+  int frame = 0;
+  double stamp_s = 0;
+  body::BodyPose pose;  // of the MAP particle (the best weighted one), world, metres
+  std::array<Eigen::Vector3d, body::kNumBodyJoints> joint_sd_m;  // weighted spread of each joint
+  Eigen::Matrix3d waist_covariance_m2 = Eigen::Matrix3d::Zero();
+  double heading_rad = 0, heading_sd_rad = 0;
+  double speed_kmh = 0;            // the MAP particle's gait
+  double effective_sample_size = 0;
+  bool resampled = false;
+  double map_log_likelihood = 0;
+  bool lost = false;               // the likelihood says the body is no longer where the particles are
+};
+
+// Time spent on the last frame, milliseconds.
+struct TrackerTiming {
+  double precompute_ms = 0;  // the frame's evidence (maps, prefix sums, flow)
+  double particles_ms = 0;   // propagating and weighing every particle (dynamics + likelihood)
+  double resample_ms = 0;    // resampling, including the re-propagation of Δs frames
+  double total_ms = 0;
+};
+
+class Tracker {
+ public:
+  // `prior_table` is the prior's gait table (optimised with its fixed controls), made for
+  // `body` proportions. Throws std::invalid_argument naming any bad option.
+  Tracker(const vision::Camera& camera, const vision::GroundPlane& ground, const gait::GaitTable& prior_table,
+          const prior::PriorOptions& prior, const TrackerOptions& options,
+          const vision::LikelihoodOptions& likelihood = {});
+  ~Tracker();
+
+  // The background model (learned from frames of this camera); needed before start().
+  void setBackground(vision::BackgroundModel background);
+  const vision::BackgroundModel& background() const { return background_; }
+
+  // Learns the parts' appearance from `bgr` at the guess and draws the particles there.
+  TrackEstimate start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess);
+  // The next frame: propagates, weighs, resamples if needed. Frames must come in order of stamp.
+  TrackEstimate track(const cv::Mat& bgr, double stamp_s);
+
+  bool started() const { return filter_ != nullptr; }
+  const std::vector<TrackerParticle>& particles() const { return filter_->states(); }
+  const std::vector<double>& logWeights() const { return filter_->logWeights(); }
+  // The MAP state sequence over the buffered frames (oldest first) as body poses, and their frames.
+  std::vector<body::BodyPose> mapPoses(std::vector<int>* frames) const;
+  const TrackerTiming& timing() const { return timing_; }
+  const vision::FrameEvidence& evidence() const;  // of the newest frame
+  int gaitCount() const { return static_cast<int>(bank_.size()); }
+  double gaitSpeedKmh(int gait) const { return bank_[gait].speed_kmh; }
+  // The pose of a particle (world, metres).
+  body::BodyPose pose(const TrackerParticle& particle) const;
+  // Its parts' image outlines.
+  void project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const;
+
+ private:
+  struct BankGait {
+    std::unique_ptr<prior::BodyPrior> prior;
+    double speed_kmh = 0, step_length_m = 0;  // the person's, by Froude scaling
+  };
+  double weigh(TrackerParticle& particle, int frame, const body::BodyPose& pose) const;
+  TrackEstimate estimate(const FilterStepReport& report) const;
+  cv::Rect regionOfInterest() const;
+  void learnAppearance(const cv::Mat& bgr, const InitialGuess& guess);
+
+  vision::Camera camera_;
+  vision::GroundPlane ground_;
+  TrackerOptions options_;
+  vision::LikelihoodOptions likelihood_;
+  std::vector<BankGait> bank_;
+  vision::BackgroundModel background_;
+  vision::AppearanceModel appearance_;
+  std::unique_ptr<ParticleFilter<TrackerParticle>> filter_;
+  // The evidence of the buffered frames, newest last (resampling weighs the last Δs again).
+  std::vector<std::unique_ptr<vision::FrameEvidence>> evidence_;
+  std::vector<int> evidence_frames_;
+  cv::Mat previous_grey_;
+  int frame_ = 0;
+  double stamp_s_ = 0, dt_s_ = 0;
+  int frames_lost_ = 0;
+  TrackerTiming timing_;
+};
+
+}  // namespace kneed_walker::core::tracking

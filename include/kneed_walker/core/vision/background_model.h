@@ -1,0 +1,49 @@
+// The background model of paper §4 ("Likelihood"): at each pixel the mean of the measurement
+// z = (blue, green, red, ∂I/∂x, ∂I/∂y) (grey levels; I the grey image) and its 5×5 covariance,
+// learned from a set of frames of the static camera, robustly: the person may be in them.
+//
+// Learning: per pixel and channel the median and the MAD over the frames; a frame's value is
+// an outlier when any channel lies more than `outlier_mads` robust SDs from the median (a person
+// passing); mean and covariance come from the inliers. Every variance is floored
+// (colour_floor, gradient_floor), so that a flat or noise-free region is not infinitely sure.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace kneed_walker::core::vision {
+
+constexpr int kMeasurementChannels = 5;  // B, G, R, ∂I/∂x, ∂I/∂y
+
+// The measurements of one frame: CV_32FC(5), the image's size.
+cv::Mat measurements(const cv::Mat& bgr_image);
+
+struct BackgroundOptions {
+  double colour_floor = 4.0;    // SD floor of each colour channel, grey levels
+  double gradient_floor = 3.0;  // SD floor of each gradient component, grey levels per pixel
+  double outlier_mads = 3.0;    // a sample further than this many robust SDs is an outlier
+};
+
+class BackgroundModel {
+ public:
+  BackgroundModel() = default;
+  // From BGR 8-bit frames of one size (at least 1; 10–30 spread over a sequence are usual).
+  // Throws std::invalid_argument for no frames, mixed sizes or types.
+  static BackgroundModel learn(const std::vector<cv::Mat>& frames, const BackgroundOptions& options = {});
+
+  // log N(z; μ, Σ) of a frame's measurements (from measurements()) inside `roi`, into the
+  // CV_32F `log_density` of roi's size.
+  void logDensity(const cv::Mat& frame_measurements, const cv::Rect& roi, cv::Mat& log_density) const;
+
+  cv::Size size() const { return mean_.size(); }
+  bool empty() const { return mean_.empty(); }
+  const cv::Mat& mean() const { return mean_; }  // CV_32FC(5)
+
+ private:
+  cv::Mat mean_;          // CV_32FC(5)
+  cv::Mat whitening_;     // CV_32FC(15): the lower triangle of L⁻¹, Σ = L Lᵀ, row by row
+  cv::Mat log_normaliser_;  // CV_32F: −½ log((2π)⁵ |Σ|)
+};
+
+}  // namespace kneed_walker::core::vision

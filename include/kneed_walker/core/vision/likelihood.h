@@ -1,0 +1,96 @@
+// The image likelihood of paper §4: log p(z_t | s_t) up to a constant, as the sum over body
+// parts of each part's average appearance log-likelihood ratio (foreground part model against
+// the background model) over its visible pixels, and its average optical-flow log-likelihood
+// ratio (eq. 13 at the motion the particle predicts against u = 0) over its visible grid
+// points. Parts occlude each other: a part's pixels covered by a nearer part are not its own.
+//
+// FrameEvidence holds everything shared by all particles of a frame, computed once: per part
+// kind a map of clamped per-pixel log ratios with row-wise prefix sums, and the flow grid. A
+// particle then costs two look-ups per row its outline covers (cost grows with the rows, not
+// with the area) and one Student-t per visible flow grid point; evaluate() allocates nothing.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <vector>
+
+#include "kneed_walker/core/vision/appearance_model.h"
+#include "kneed_walker/core/vision/background_model.h"
+#include "kneed_walker/core/vision/body_projection.h"
+#include "kneed_walker/core/vision/optical_flow.h"
+
+namespace kneed_walker::core::vision {
+
+struct LikelihoodOptions {
+  BackgroundOptions background;
+  AppearanceOptions appearance;
+  FlowOptions flow;
+  bool use_flow = true;
+  double ratio_limit = 6.0;     // per-pixel appearance log ratios are clamped to ±this
+  double outside_ratio = -3.0;  // the log ratio a part's pixel scores outside the evidence's region or image
+  int min_part_pixels = 6;      // a part with fewer visible pixels is left out (hidden)
+  double appearance_weight = 1.0;  // weight of each part's appearance average
+  double flow_weight = 1.0;        // weight of each part's flow average
+};
+
+class FrameEvidence {
+ public:
+  // The evidence of one BGR frame inside `roi` (clipped to the image). `previous_grey` is the
+  // previous frame's 8-bit grey image, or empty for the first frame (no flow).
+  void compute(const cv::Mat& bgr, const cv::Mat& previous_grey, const cv::Rect& roi,
+               const BackgroundModel& background, const AppearanceModel& appearance,
+               const LikelihoodOptions& options);
+  const cv::Rect& roi() const { return roi_; }
+  cv::Size imageSize() const { return image_size_; }
+  bool hasFlow() const { return !flow_.empty(); }
+  const FlowField& flow() const { return flow_; }
+  // Σ of a kind's log ratios over columns [x0, x1) of image row y (inside the roi).
+  double rowSum(PartKind kind, int y, int x0, int x1) const {
+    const double* p = prefix_[kind].ptr<double>(y - roi_.y);
+    return p[x1 - roi_.x] - p[x0 - roi_.x];
+  }
+  // The clamped per-pixel log ratio map of a kind (roi-sized, CV_32F), for pictures and tests.
+  const cv::Mat& ratioMap(PartKind kind) const { return ratio_[kind]; }
+
+ private:
+  cv::Rect roi_;
+  cv::Size image_size_;
+  std::array<cv::Mat, kNumPartKinds> ratio_;   // CV_32F
+  std::array<cv::Mat, kNumPartKinds> prefix_;  // CV_64F, roi.height × (roi.width + 1)
+  FlowField flow_;
+};
+
+// What evaluate() found per part.
+struct PartScore {
+  double appearance = 0;  // average log ratio over the part's pixels (outside ones at outside_ratio)
+  double flow = 0;        // average flow log ratio over its visible grid points
+  int pixels = 0;         // visible pixels (inside and outside the evidence's region)
+  int flow_points = 0;
+};
+using PartScores = std::array<PartScore, body::kNumBodyParts>;
+
+// The image axes of a body's parts, all the flow term needs of the previous frame's body.
+struct PartImageAxis {
+  std::array<Eigen::Vector2f, 2> ends_px;  // proximal, distal
+  bool visible = false;
+};
+using BodyImageAxes = std::array<PartImageAxis, body::kNumBodyParts>;
+BodyImageAxes imageAxes(const BodyOutlines& outlines);
+
+// log p(z | s) + const for one particle's projected body. `previous` is the same body's image
+// axes in the previous frame (for the flow it predicts), or nullptr. `scores` receives the parts'
+// terms if given. Thread-safe; no allocation after a thread's first call.
+double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& outlines,
+                          const BodyImageAxes* previous, const LikelihoodOptions& options,
+                          PartScores* scores = nullptr);
+
+// The pixels inside a convex outline: per image row y in [first_row, first_row + rows), the
+// columns [left[i], right[i]). Used by evaluateLikelihood and to sample appearance pixels.
+struct RowSpans {
+  int first_row = 0, rows = 0;
+  std::vector<int> left, right;
+};
+void rasterize(const PartOutline& outline, RowSpans& spans);
+
+}  // namespace kneed_walker::core::vision

@@ -1,0 +1,54 @@
+// Optical flow at the points of a coarse grid (paper §4): OpenCV's DIS flow between the previous
+// and the current frame, and at each grid point an approximate estimator covariance Σ from the
+// local 2×2 gradient tensor, Σ = σ² (w T + ε I)⁻¹ + σ_min² I (T the window's mean tensor, w its
+// pixel count): large along an edge and in flat regions, small at corners.
+//
+// Grid points lie at image coordinates that are multiples of grid_step_px, so that a particle's
+// visible rows and columns find them without search.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace kneed_walker::core::vision {
+
+struct FlowOptions {
+  int grid_step_px = 6;         // grid spacing, px
+  int window_px = 7;            // side of the gradient tensor's window, px
+  double noise_sd = 2.0;        // σ: intensity noise, grey levels
+  double flat_epsilon = 0.16;   // ε: regularises flat regions (their flow SD is σ/√ε px)
+  double min_sd_px = 0.3;       // σ_min: DIS's own error floor, px
+};
+
+// One grid point: the measured motion v (from the previous frame to this one, px), A = ½ Σ⁻¹,
+// and log(1 + e₀²), e₀² = vᵀ A v, the Student-t's term at u = 0 (the static background).
+struct FlowPoint {
+  float vx = 0, vy = 0;
+  float a00 = 0, a01 = 0, a11 = 0;
+  float log1p_background = 0;
+};
+
+class FlowField {
+ public:
+  // Flow inside `roi` of the current frame (8-bit grey images of one size).
+  void compute(const cv::Mat& previous_grey, const cv::Mat& grey, const cv::Rect& roi,
+               const FlowOptions& options);
+  bool empty() const { return points_.empty(); }
+  int step() const { return step_; }
+  // The grid point at image coordinates (x, y), both multiples of step(), or nullptr outside.
+  const FlowPoint* at(int x, int y) const {
+    const int i = x / step_ - first_column_, j = y / step_ - first_row_;
+    if (i < 0 || j < 0 || i >= columns_ || j >= rows_) return nullptr;
+    return &points_[static_cast<size_t>(j) * columns_ + i];
+  }
+  // The Student-t log-likelihood ratio of eq. 13 (n = 2) of a predicted motion u against the
+  // background's u = 0 at a grid point: −2 (log(1 + e²) − log(1 + e₀²)); the log|Σ| terms cancel.
+  static float logRatio(const FlowPoint& p, float ux, float uy);
+
+ private:
+  std::vector<FlowPoint> points_;
+  int step_ = 1, first_column_ = 0, first_row_ = 0, columns_ = 0, rows_ = 0;
+};
+
+}  // namespace kneed_walker::core::vision

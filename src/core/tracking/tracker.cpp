@@ -1,0 +1,330 @@
+#include "kneed_walker/core/tracking/tracker.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "kneed_walker/core/dynamics/walker_model.h"
+
+namespace kneed_walker::core::tracking {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// A track is lost after this many frames in a row whose MAP log-likelihood ratio is below 0:
+// the best particle explains the image worse than the background does.
+constexpr int kLostAfterFrames = 3;
+
+}  // namespace
+
+InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
+                          const cv::Rect2d& box) {
+  if (!(box.width > 0 && box.height > 0)) throw std::invalid_argument("the person's box is empty");
+  // The ground point under the middle of the box's bottom edge (iterated for a sloped ground).
+  const Eigen::Vector2d foot_px(box.x + 0.5 * box.width, box.y + box.height);
+  double height = 0;
+  std::optional<Eigen::Vector3d> point;
+  for (int i = 0; i < 5; ++i) {
+    point = camera.groundPoint(foot_px, height);
+    if (!point) throw std::invalid_argument("the bottom of the person's box does not see the ground");
+    height = ground.height(point->head<2>());
+  }
+  InitialGuess guess;
+  guess.position_m = point->head<2>();
+  guess.heading_sd_rad = M_PI;
+  return guess;
+}
+
+Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground,
+                 const gait::GaitTable& table, const prior::PriorOptions& prior_options,
+                 const TrackerOptions& options, const vision::LikelihoodOptions& likelihood)
+    : camera_(camera), ground_(ground), options_(options), likelihood_(likelihood) {
+  const auto problems = validate(options);
+  if (!problems.empty()) {
+    std::string message = "tracker options:";
+    for (const auto& p : problems) message += " " + p + ";";
+    throw std::invalid_argument(message);
+  }
+  prior::requirePriorTable(table, prior_options);
+  // The gaits the particles walk around: the table's feasible gaits at the slope nearest the
+  // ground's, scaled to the person by Froude similarity.
+  const gait::GaitGrid& grid = table.grid;
+  int slope = 0;
+  for (int s = 1; s < static_cast<int>(grid.slopes_rad.size()); ++s)
+    if (std::abs(grid.slopes_rad[s] - options.ground_slope_rad) < std::abs(grid.slopes_rad[slope] - options.ground_slope_rad))
+      slope = s;
+  const dynamics::WalkerSimulator simulator(dynamics::dimensionlessWalker(table.body));
+  const double leg_m = table.body.leg_length_per_height * options.person_height_m;
+  const double froude_speed = std::sqrt(leg_m / grid.referenceLegLength());
+  for (int i = 0; i < grid.size(); ++i) {
+    const auto cell = grid.cell(i);
+    if (cell[2] != slope || !table.entries[i].feasible) continue;
+    BankGait gait;
+    gait.prior = std::make_unique<prior::BodyPrior>(
+        prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
+        table.body.leg_length_per_height, grid.gravity);
+    gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
+    gait.step_length_m = grid.step_lengths_m[cell[1]] * leg_m / grid.referenceLegLength();
+    bank_.push_back(std::move(gait));
+  }
+  if (bank_.empty())
+    throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope");
+}
+
+Tracker::~Tracker() = default;
+
+void Tracker::setBackground(vision::BackgroundModel background) {
+  if (background.size() != cv::Size(camera_.width(), camera_.height()))
+    throw std::invalid_argument("the background model's size differs from the camera's");
+  background_ = std::move(background);
+}
+
+body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
+  body::BodyPose pose = bank_[particle.gait].prior->pose(particle.body);
+  const double lift = ground_.height(particle.body.placement.value.ground_origin_m);
+  for (auto& joint : pose.joints) joint.z() += lift;
+  for (auto& foot : pose.foot_centres) foot.z() += lift;
+  return pose;
+}
+
+void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const {
+  vision::projectBodyParts(camera_, pose, bank_.front().prior->shape(), outlines);
+}
+
+const vision::FrameEvidence& Tracker::evidence() const { return *evidence_.back(); }
+
+double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& pose_on_slope) const {
+  body::BodyPose pose = pose_on_slope;
+  const double lift = ground_.height(particle.body.placement.value.ground_origin_m);
+  for (auto& joint : pose.joints) joint.z() += lift;
+  thread_local vision::BodyOutlines outlines;
+  project(pose, outlines);
+  const vision::FrameEvidence* evidence = nullptr;
+  for (size_t i = 0; i < evidence_frames_.size(); ++i)
+    if (evidence_frames_[i] == frame) evidence = evidence_[i].get();
+  if (!evidence) throw std::logic_error("the tracker has no evidence for a frame it weighs");
+  const bool has_previous = frame > 0 && particle.axes[body::kTorsoPart].visible;
+  const double log_likelihood = vision::evaluateLikelihood(*evidence, outlines, has_previous ? &particle.axes : nullptr,
+                                                           likelihood_);
+  particle.axes = vision::imageAxes(outlines);
+  for (int j = 0; j < body::kNumBodyJoints; ++j) particle.joints[j] = pose.joints[j].cast<float>();
+  particle.log_likelihood = static_cast<float>(log_likelihood);
+  return log_likelihood;
+}
+
+void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
+  // The guess's body in mid-stance (legs together), on a mid-range gait.
+  int middle = 0;
+  const double mid_speed = 0.5 * (guess.min_speed_kmh + guess.max_speed_kmh);
+  for (int g = 1; g < gaitCount(); ++g)
+    if (std::abs(bank_[g].speed_kmh - mid_speed) < std::abs(bank_[middle].speed_kmh - mid_speed)) middle = g;
+  common::Random random(mixSeed(options_.seed, 0, 7, 0));
+  body::BodyPose pose;
+  TrackerParticle particle;
+  particle.gait = middle;
+  particle.body = bank_[middle].prior->sample(0.25, guess.position_m, guess.heading_rad, random, pose);
+  pose = this->pose(particle);
+  vision::BodyOutlines outlines;
+  project(pose, outlines);
+  // Pixels inside each part that the background explains worse than a flat foreground density
+  // (colour uniform over 256³, gradient zero-mean with the appearance model's spread) would.
+  const double gradient_sd = likelihood_.appearance.gradient_sd;
+  const float foreground_floor =
+      static_cast<float>(-3 * std::log(256.0) - std::log(2 * M_PI * gradient_sd * gradient_sd));
+  const cv::Mat z = vision::measurements(bgr);
+  cv::Mat density;
+  const cv::Rect image(0, 0, bgr.cols, bgr.rows);
+  background_.logDensity(z, image, density);
+  std::array<std::vector<cv::Vec3b>, vision::kNumPartKinds> samples;
+  vision::RowSpans spans;
+  for (int p = 0; p < body::kNumBodyParts; ++p) {
+    vision::rasterize(outlines[p], spans);
+    const vision::PartKind kind = vision::partKind(static_cast<body::BodyPart>(p));
+    for (int k = 0; k < spans.rows; ++k) {
+      const int y = spans.first_row + k;
+      if (y < 0 || y >= bgr.rows) continue;
+      for (int x = std::max(0, spans.left[k]); x < std::min(bgr.cols, spans.right[k]); ++x)
+        if (density.at<float>(y, x) < foreground_floor) samples[kind].push_back(bgr.at<cv::Vec3b>(y, x));
+    }
+  }
+  appearance_ = vision::AppearanceModel::learn(samples, likelihood_.appearance);
+}
+
+cv::Rect Tracker::regionOfInterest() const {
+  float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
+  for (const TrackerParticle& p : filter_->states())
+    for (const auto& axis : p.axes)
+      if (axis.visible)
+        for (const auto& end : axis.ends_px) {
+          x0 = std::min(x0, end.x()), x1 = std::max(x1, end.x());
+          y0 = std::min(y0, end.y()), y1 = std::max(y1, end.y());
+        }
+  if (x0 > x1) return cv::Rect(0, 0, camera_.width(), camera_.height());
+  // Part outlines reach beyond their axes by their widths, and the body moves between frames.
+  const float margin = 16.0f + 0.3f * (y1 - y0);
+  const cv::Rect box(cv::Point(static_cast<int>(std::floor(x0 - margin)), static_cast<int>(std::floor(y0 - margin))),
+                     cv::Point(static_cast<int>(std::ceil(x1 + margin)), static_cast<int>(std::ceil(y1 + margin))));
+  return box & cv::Rect(0, 0, camera_.width(), camera_.height());
+}
+
+TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess) {
+  if (background_.empty()) throw std::logic_error("Tracker::start needs a background model (setBackground)");
+  if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
+    throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
+  const auto started_at = Clock::now();
+  learnAppearance(bgr, guess);
+  FilterOptions filter_options;
+  filter_options.num_particles = options_.num_particles;
+  filter_options.resample_ess_threshold = options_.resample_ess_threshold;
+  filter_options.resample_lag_frames = options_.resample_lag_frames;
+  filter_options.resample_mixing = options_.resample_mixing;
+  filter_options.num_threads = options_.num_threads;
+  filter_options.seed = options_.seed;
+  filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(filter_options);
+  frame_ = 0;
+  stamp_s_ = stamp_s;
+  frames_lost_ = 0;
+  evidence_.clear();
+  evidence_frames_.clear();
+  cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
+
+  // The region the guess can reach: its spread around the position, the person's height up.
+  const double reach = 2.5 * guess.position_sd_m + 1.0;
+  float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
+  for (int k = 0; k < 16; ++k)
+    for (double up : {0.0, 1.15 * options_.person_height_m}) {
+      const Eigen::Vector2d xy = guess.position_m + reach * Eigen::Vector2d(std::cos(k * M_PI / 8), std::sin(k * M_PI / 8));
+      if (const auto px = camera_.project(Eigen::Vector3d(xy.x(), xy.y(), ground_.height(xy) + up))) {
+        x0 = std::min<float>(x0, px->x()), x1 = std::max<float>(x1, px->x());
+        y0 = std::min<float>(y0, px->y()), y1 = std::max<float>(y1, px->y());
+      }
+    }
+  const cv::Rect roi = x0 > x1 ? cv::Rect(0, 0, bgr.cols, bgr.rows)
+                               : cv::Rect(cv::Point(int(x0), int(y0)), cv::Point(int(x1) + 1, int(y1) + 1));
+  const auto precompute_at = Clock::now();
+  evidence_.push_back(std::make_unique<vision::FrameEvidence>());
+  evidence_.back()->compute(bgr, cv::Mat(), roi, background_, appearance_, likelihood_);
+  evidence_frames_.push_back(0);
+  timing_ = TrackerTiming{};
+  timing_.precompute_ms = msSince(precompute_at);
+
+  std::vector<int> gaits;
+  for (int g = 0; g < gaitCount(); ++g)
+    if (bank_[g].speed_kmh >= guess.min_speed_kmh && bank_[g].speed_kmh <= guess.max_speed_kmh) gaits.push_back(g);
+  if (gaits.empty())
+    for (int g = 0; g < gaitCount(); ++g) gaits.push_back(g);
+  const auto particles_at = Clock::now();
+  const FilterStepReport report = filter_->initialize(
+      [&](common::Random& random) {
+        TrackerParticle p;
+        p.gait = gaits[std::uniform_int_distribution<int>(0, static_cast<int>(gaits.size()) - 1)(random)];
+        std::normal_distribution<double> normal(0.0, 1.0);
+        const double phase = std::uniform_real_distribution<double>(0.0, 1.0)(random);
+        const Eigen::Vector2d at = guess.position_m + guess.position_sd_m * Eigen::Vector2d(normal(random), normal(random));
+        const double heading = guess.heading_sd_rad >= M_PI
+                                   ? std::uniform_real_distribution<double>(-M_PI, M_PI)(random)
+                                   : guess.heading_rad + guess.heading_sd_rad * normal(random);
+        body::BodyPose unused;
+        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused);
+        return p;
+      },
+      [&](TrackerParticle& p, int frame) { return weigh(p, frame, bank_[p.gait].prior->pose(p.body)); }, 0);
+  timing_.particles_ms = msSince(particles_at);
+  timing_.total_ms = msSince(started_at);
+  return estimate(report);
+}
+
+TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
+  if (!filter_) throw std::logic_error("Tracker::track before start");
+  if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
+    throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
+  const auto started_at = Clock::now();
+  const double gap = stamp_s - stamp_s_;
+  dt_s_ = gap > 0 && gap <= options_.max_frame_gap_s ? gap : options_.default_frame_interval_s;
+  stamp_s_ = stamp_s;
+  ++frame_;
+  const auto precompute_at = Clock::now();
+  auto evidence = std::make_unique<vision::FrameEvidence>();
+  evidence->compute(bgr, previous_grey_, regionOfInterest(), background_, appearance_, likelihood_);
+  evidence_.push_back(std::move(evidence));
+  evidence_frames_.push_back(frame_);
+  while (static_cast<int>(evidence_.size()) > options_.resample_lag_frames + 1) {
+    evidence_.erase(evidence_.begin());
+    evidence_frames_.erase(evidence_frames_.begin());
+  }
+  cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
+  timing_ = TrackerTiming{};
+  timing_.precompute_ms = msSince(precompute_at);
+
+  // Frames buffered for resampling may have other intervals; each particle step uses the
+  // interval into its frame.
+  const double dt = dt_s_;
+  const auto particles_at = Clock::now();
+  double resample_ms = 0;
+  const FilterStepReport report = filter_->step(
+      [&](TrackerParticle& p, int frame, common::Random& random) {
+        body::BodyPose pose;
+        bank_[p.gait].prior->transition(p.body, dt, random, pose);
+        return weigh(p, frame, pose);
+      },
+      frame_);
+  (void)resample_ms;
+  timing_.particles_ms = msSince(particles_at);
+  timing_.total_ms = msSince(started_at);
+  return estimate(report);
+}
+
+std::vector<body::BodyPose> Tracker::mapPoses(std::vector<int>* frames) const {
+  std::vector<body::BodyPose> poses;
+  for (const TrackerParticle& p : filter_->mapSequence(frames)) poses.push_back(pose(p));
+  return poses;
+}
+
+TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
+  TrackEstimate e;
+  e.frame = frame_;
+  e.stamp_s = stamp_s_;
+  e.effective_sample_size = report.effective_sample_size;
+  e.resampled = report.resampled;
+  const auto& particles = filter_->states();
+  const auto& log_weights = filter_->logWeights();
+  const int best = filter_->best();
+  e.pose = pose(particles[best]);
+  e.map_log_likelihood = particles[best].log_likelihood;
+  e.speed_kmh = bank_[particles[best].gait].speed_kmh;
+  e.heading_rad = particles[best].body.placement.value.heading_rad;
+  // Weighted spreads.
+  std::array<Eigen::Vector3d, body::kNumBodyJoints> mean, second;
+  mean.fill(Eigen::Vector3d::Zero());
+  second.fill(Eigen::Vector3d::Zero());
+  Eigen::Matrix3d waist_outer = Eigen::Matrix3d::Zero();
+  double heading_sin = 0, heading_cos = 0;
+  for (size_t i = 0; i < particles.size(); ++i) {
+    const double w = std::exp(log_weights[i]);
+    for (int j = 0; j < body::kNumBodyJoints; ++j) {
+      const Eigen::Vector3d x = particles[i].joints[j].cast<double>();
+      mean[j] += w * x;
+      second[j] += w * x.cwiseProduct(x);
+    }
+    const Eigen::Vector3d waist = particles[i].joints[body::kWaist].cast<double>();
+    waist_outer += w * waist * waist.transpose();
+    heading_sin += w * std::sin(particles[i].body.placement.value.heading_rad);
+    heading_cos += w * std::cos(particles[i].body.placement.value.heading_rad);
+  }
+  for (int j = 0; j < body::kNumBodyJoints; ++j)
+    e.joint_sd_m[j] = (second[j] - mean[j].cwiseProduct(mean[j])).cwiseMax(0.0).cwiseSqrt();
+  e.waist_covariance_m2 = waist_outer - mean[body::kWaist] * mean[body::kWaist].transpose();
+  const double resultant = std::hypot(heading_sin, heading_cos);
+  e.heading_sd_rad = std::sqrt(std::max(0.0, -2 * std::log(std::max(resultant, 1e-12))));
+  return e;
+}
+
+}  // namespace kneed_walker::core::tracking

@@ -1,0 +1,138 @@
+#include "kneed_walker/core/vision/background_model.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include "kneed_walker/core/common/parallel.h"
+
+namespace kneed_walker::core::vision {
+
+cv::Mat measurements(const cv::Mat& bgr) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::invalid_argument("measurements need a BGR 8-bit image");
+  cv::Mat colour, grey, gx, gy;
+  bgr.convertTo(colour, CV_32F);
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(grey, CV_32F);
+  cv::GaussianBlur(grey, grey, cv::Size(3, 3), 0.8);
+  // Central differences, grey levels per pixel.
+  cv::Sobel(grey, gx, CV_32F, 1, 0, 1, 0.5);
+  cv::Sobel(grey, gy, CV_32F, 0, 1, 1, 0.5);
+  std::vector<cv::Mat> channels;
+  cv::split(colour, channels);
+  channels.push_back(gx);
+  channels.push_back(gy);
+  cv::Mat z;
+  cv::merge(channels, z);
+  return z;
+}
+
+BackgroundModel BackgroundModel::learn(const std::vector<cv::Mat>& frames, const BackgroundOptions& options) {
+  if (frames.empty()) throw std::invalid_argument("the background model needs at least one frame");
+  std::vector<cv::Mat> z;
+  for (const cv::Mat& frame : frames) {
+    if (frame.size() != frames[0].size() || frame.type() != CV_8UC3)
+      throw std::invalid_argument("background frames must be BGR 8-bit images of one size");
+    z.push_back(measurements(frame));
+  }
+  constexpr int C = kMeasurementChannels;
+  const int n = static_cast<int>(z.size());
+  const cv::Size size = frames[0].size();
+  BackgroundModel model;
+  model.mean_.create(size, CV_32FC(C));
+  model.whitening_.create(size, CV_32FC(15));
+  model.log_normaliser_.create(size, CV_32F);
+  const double floors[C] = {options.colour_floor, options.colour_floor, options.colour_floor,
+                            options.gradient_floor, options.gradient_floor};
+  common::parallelFor(size.height, 0, [&](int row_begin, int row_end) {
+    std::vector<float> values(n);
+    std::vector<std::array<float, C>> samples(n);
+    for (int y = row_begin; y < row_end; ++y) {
+      float* mean_row = model.mean_.ptr<float>(y);
+      float* whitening_row = model.whitening_.ptr<float>(y);
+      float* normaliser_row = model.log_normaliser_.ptr<float>(y);
+      for (int x = 0; x < size.width; ++x) {
+        for (int k = 0; k < n; ++k)
+          for (int c = 0; c < C; ++c) samples[k][c] = z[k].ptr<float>(y)[x * C + c];
+        std::array<float, C> median{}, spread{};
+        for (int c = 0; c < C; ++c) {
+          for (int k = 0; k < n; ++k) values[k] = samples[k][c];
+          std::nth_element(values.begin(), values.begin() + n / 2, values.end());
+          median[c] = values[n / 2];
+          for (int k = 0; k < n; ++k) values[k] = std::abs(samples[k][c] - median[c]);
+          std::nth_element(values.begin(), values.begin() + n / 2, values.end());
+          spread[c] = std::max<float>(1.4826f * values[n / 2], static_cast<float>(floors[c]));
+        }
+        Eigen::Matrix<double, C, 1> sum = Eigen::Matrix<double, C, 1>::Zero();
+        Eigen::Matrix<double, C, C> outer = Eigen::Matrix<double, C, C>::Zero();
+        int inliers = 0;
+        for (int k = 0; k < n; ++k) {
+          bool inlier = true;
+          for (int c = 0; c < C && inlier; ++c)
+            inlier = std::abs(samples[k][c] - median[c]) <= options.outlier_mads * spread[c];
+          if (!inlier) continue;
+          Eigen::Matrix<double, C, 1> v;
+          for (int c = 0; c < C; ++c) v[c] = samples[k][c];
+          sum += v;
+          outer += v * v.transpose();
+          ++inliers;
+        }
+        Eigen::Matrix<double, C, 1> mean;
+        Eigen::Matrix<double, C, C> covariance = Eigen::Matrix<double, C, C>::Zero();
+        if (inliers >= 3) {
+          mean = sum / inliers;
+          covariance = (outer - inliers * mean * mean.transpose()) / (inliers - 1);
+        } else {
+          for (int c = 0; c < C; ++c) mean[c] = median[c];
+        }
+        for (int c = 0; c < C; ++c) covariance(c, c) += floors[c] * floors[c];
+        const Eigen::LLT<Eigen::Matrix<double, C, C>> llt(covariance);
+        const Eigen::Matrix<double, C, C> inverse_l =
+            llt.matrixL().solve(Eigen::Matrix<double, C, C>::Identity());
+        double log_det = 0;
+        for (int c = 0; c < C; ++c) log_det += 2 * std::log(llt.matrixL()(c, c));
+        for (int c = 0; c < C; ++c) mean_row[x * C + c] = static_cast<float>(mean[c]);
+        int t = 0;
+        for (int r = 0; r < C; ++r)
+          for (int c = 0; c <= r; ++c) whitening_row[x * 15 + t++] = static_cast<float>(inverse_l(r, c));
+        normaliser_row[x] = static_cast<float>(-0.5 * (C * std::log(2 * M_PI) + log_det));
+      }
+    }
+  });
+  return model;
+}
+
+void BackgroundModel::logDensity(const cv::Mat& z, const cv::Rect& roi, cv::Mat& out) const {
+  constexpr int C = kMeasurementChannels;
+  if (z.size() != size() || z.type() != CV_32FC(C))
+    throw std::invalid_argument("background log density: the measurements do not match the model");
+  out.create(roi.size(), CV_32F);
+  for (int y = 0; y < roi.height; ++y) {
+    const float* zr = z.ptr<float>(roi.y + y) + roi.x * C;
+    const float* mr = mean_.ptr<float>(roi.y + y) + roi.x * C;
+    const float* wr = whitening_.ptr<float>(roi.y + y) + roi.x * 15;
+    const float* nr = log_normaliser_.ptr<float>(roi.y + y) + roi.x;
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < roi.width; ++x) {
+      float d[C];
+      for (int c = 0; c < C; ++c) d[c] = zr[x * C + c] - mr[x * C + c];
+      const float* w = wr + x * 15;
+      float squared = 0;
+      int t = 0;
+      for (int r = 0; r < C; ++r) {
+        float e = 0;
+        for (int c = 0; c <= r; ++c) e += w[t++] * d[c];
+        squared += e * e;
+      }
+      o[x] = nr[x] - 0.5f * squared;
+    }
+  }
+}
+
+}  // namespace kneed_walker::core::vision

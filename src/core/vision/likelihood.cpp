@@ -1,0 +1,242 @@
+#include "kneed_walker/core/vision/likelihood.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+
+namespace kneed_walker::core::vision {
+
+void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, const cv::Rect& roi,
+                            const BackgroundModel& background, const AppearanceModel& appearance,
+                            const LikelihoodOptions& options) {
+  if (bgr.type() != CV_8UC3) throw std::invalid_argument("the likelihood needs BGR 8-bit frames");
+  if (bgr.size() != background.size())
+    throw std::invalid_argument("the frame's size differs from the background model's");
+  image_size_ = bgr.size();
+  roi_ = roi & cv::Rect(0, 0, bgr.cols, bgr.rows);
+  if (roi_.empty()) roi_ = cv::Rect(0, 0, 1, 1);
+  const cv::Mat z = measurements(bgr);
+  cv::Mat background_density;
+  background.logDensity(z, roi_, background_density);
+  const float limit = static_cast<float>(options.ratio_limit);
+  for (int kind = 0; kind < kNumPartKinds; ++kind) {
+    ratio_[kind].create(roi_.size(), CV_32F);
+    prefix_[kind].create(roi_.height, roi_.width + 1, CV_64F);
+  }
+  for (int y = 0; y < roi_.height; ++y) {
+    const cv::Vec3b* pixels = bgr.ptr<cv::Vec3b>(roi_.y + y) + roi_.x;
+    const float* zr = z.ptr<float>(roi_.y + y) + roi_.x * kMeasurementChannels;
+    const float* bg = background_density.ptr<float>(y);
+    for (int kind = 0; kind < kNumPartKinds; ++kind) {
+      float* ratio = ratio_[kind].ptr<float>(y);
+      double* prefix = prefix_[kind].ptr<double>(y);
+      prefix[0] = 0;
+      for (int x = 0; x < roi_.width; ++x) {
+        const float* m = zr + x * kMeasurementChannels;
+        const float r = appearance.logDensity(static_cast<PartKind>(kind), pixels[x], m[3], m[4]) - bg[x];
+        ratio[x] = std::clamp(r, -limit, limit);
+        prefix[x + 1] = prefix[x] + ratio[x];
+      }
+    }
+  }
+  flow_ = FlowField();
+  if (options.use_flow && !previous_grey.empty()) {
+    cv::Mat grey;
+    cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+    flow_.compute(previous_grey, grey, roi_, options.flow);
+  }
+}
+
+void rasterize(const PartOutline& outline, RowSpans& spans) {
+  spans.rows = 0;
+  if (!outline.visible || outline.size < 3) return;
+  double y_min = outline.hull[0].y(), y_max = y_min;
+  for (int i = 1; i < outline.size; ++i) {
+    y_min = std::min(y_min, outline.hull[i].y());
+    y_max = std::max(y_max, outline.hull[i].y());
+  }
+  // Pixel centres at integer coordinates; guard against absurd outlines (far off the image).
+  if (!(y_max - y_min < 1e5) || std::abs(y_min) > 1e6) return;
+  spans.first_row = static_cast<int>(std::ceil(y_min));
+  spans.rows = static_cast<int>(std::floor(y_max)) - spans.first_row + 1;
+  if (spans.rows <= 0) {
+    spans.rows = 0;
+    return;
+  }
+  if (static_cast<int>(spans.left.size()) < spans.rows) {
+    spans.left.resize(spans.rows);
+    spans.right.resize(spans.rows);
+  }
+  thread_local std::vector<double> lo, hi;
+  if (static_cast<int>(lo.size()) < spans.rows) lo.resize(spans.rows), hi.resize(spans.rows);
+  std::fill(lo.begin(), lo.begin() + spans.rows, 1e300);
+  std::fill(hi.begin(), hi.begin() + spans.rows, -1e300);
+  for (int i = 0; i < outline.size; ++i) {
+    const Eigen::Vector2d& p = outline.hull[i];
+    const Eigen::Vector2d& q = outline.hull[(i + 1) % outline.size];
+    const double top = std::min(p.y(), q.y()), bottom = std::max(p.y(), q.y());
+    const int r0 = static_cast<int>(std::ceil(top)), r1 = static_cast<int>(std::floor(bottom));
+    if (p.y() == q.y()) {
+      if (r0 == r1 && r0 >= spans.first_row && r0 < spans.first_row + spans.rows) {
+        const int k = r0 - spans.first_row;
+        lo[k] = std::min({lo[k], p.x(), q.x()});
+        hi[k] = std::max({hi[k], p.x(), q.x()});
+      }
+      continue;
+    }
+    const double slope = (q.x() - p.x()) / (q.y() - p.y());
+    for (int r = std::max(r0, spans.first_row); r <= std::min(r1, spans.first_row + spans.rows - 1); ++r) {
+      const double x = p.x() + (r - p.y()) * slope;
+      const int k = r - spans.first_row;
+      lo[k] = std::min(lo[k], x);
+      hi[k] = std::max(hi[k], x);
+    }
+  }
+  for (int k = 0; k < spans.rows; ++k) {
+    if (lo[k] > hi[k]) {
+      spans.left[k] = spans.right[k] = 0;
+      continue;
+    }
+    spans.left[k] = static_cast<int>(std::ceil(lo[k]));
+    spans.right[k] = std::max(spans.left[k], static_cast<int>(std::floor(hi[k])) + 1);
+  }
+}
+
+namespace {
+
+struct Interval {
+  int begin, end;
+};
+
+}  // namespace
+
+BodyImageAxes imageAxes(const BodyOutlines& outlines) {
+  BodyImageAxes axes;
+  for (int p = 0; p < body::kNumBodyParts; ++p) {
+    axes[p].visible = outlines[p].visible;
+    for (int end = 0; end < 2; ++end) axes[p].ends_px[end] = outlines[p].ends_px[end].cast<float>();
+  }
+  return axes;
+}
+
+double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& outlines,
+                          const BodyImageAxes* previous, const LikelihoodOptions& options,
+                          PartScores* scores) {
+  constexpr int kParts = body::kNumBodyParts;
+  thread_local std::array<RowSpans, kParts> spans;
+  // Parts near to far: a nearer part's pixels are not a farther one's.
+  std::array<int, kParts> order;
+  for (int p = 0; p < kParts; ++p) order[p] = p;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return outlines[a].depth_m < outlines[b].depth_m; });
+  int top = 1 << 30, bottom = -(1 << 30);
+  for (int p = 0; p < kParts; ++p) {
+    rasterize(outlines[p], spans[p]);
+    if (spans[p].rows > 0) {
+      top = std::min(top, spans[p].first_row);
+      bottom = std::max(bottom, spans[p].first_row + spans[p].rows);
+    }
+  }
+  // The image motion each part predicts: the similarity that takes its axis now to its axis in
+  // the previous frame maps a point now to where it was.
+  const bool flow = evidence.hasFlow() && previous != nullptr;
+  std::array<std::complex<double>, kParts> flow_scale;
+  std::array<bool, kParts> has_motion{};
+  if (flow) {
+    for (int p = 0; p < kParts; ++p) {
+      const PartOutline& now = outlines[p];
+      const PartImageAxis& before = (*previous)[p];
+      if (!now.visible || !before.visible) continue;
+      const std::complex<double> axis(now.ends_px[1].x() - now.ends_px[0].x(), now.ends_px[1].y() - now.ends_px[0].y());
+      const std::complex<double> axis_before(before.ends_px[1].x() - before.ends_px[0].x(),
+                                             before.ends_px[1].y() - before.ends_px[0].y());
+      if (std::abs(axis) < 1e-6) continue;
+      flow_scale[p] = axis_before / axis;
+      has_motion[p] = true;
+    }
+  }
+  std::array<double, kParts> appearance_sum{}, flow_sum{};
+  std::array<int, kParts> inside{}, outside{}, flow_count{};
+  const cv::Rect roi = evidence.roi();
+  const int step = flow ? evidence.flow().step() : 1;
+  const int roi_right = roi.x + roi.width, roi_bottom = roi.y + roi.height;
+  std::array<Interval, kParts> covered;
+  std::array<Interval, kParts + 1> pieces, next;
+  for (int y = top; y < bottom; ++y) {
+    int n_covered = 0;
+    const bool row_inside = y >= roi.y && y < roi_bottom;
+    const bool flow_row = flow && row_inside && y % step == 0;
+    for (int p : order) {
+      const RowSpans& s = spans[p];
+      const int k = y - s.first_row;
+      if (k < 0 || k >= s.rows || s.left[k] >= s.right[k]) continue;
+      const Interval span{s.left[k], s.right[k]};
+      // The span less the nearer parts' spans on this row.
+      int n_pieces = 1;
+      pieces[0] = span;
+      for (int c = 0; c < n_covered && n_pieces > 0; ++c) {
+        int n_next = 0;
+        for (int i = 0; i < n_pieces; ++i) {
+          const Interval& piece = pieces[i];
+          if (covered[c].end <= piece.begin || covered[c].begin >= piece.end) {
+            next[n_next++] = piece;
+            continue;
+          }
+          if (piece.begin < covered[c].begin && n_next < kParts + 1) next[n_next++] = {piece.begin, covered[c].begin};
+          if (covered[c].end < piece.end && n_next < kParts + 1) next[n_next++] = {covered[c].end, piece.end};
+        }
+        std::copy(next.begin(), next.begin() + n_next, pieces.begin());
+        n_pieces = n_next;
+      }
+      covered[n_covered++] = span;
+      const PartKind kind = partKind(static_cast<body::BodyPart>(p));
+      for (int i = 0; i < n_pieces; ++i) {
+        const int a = pieces[i].begin, b = pieces[i].end;
+        const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
+        if (row_inside && ca < cb) {
+          appearance_sum[p] += evidence.rowSum(kind, y, ca, cb);
+          inside[p] += cb - ca;
+          outside[p] += (b - a) - (cb - ca);
+        } else {
+          outside[p] += b - a;
+        }
+        if (flow_row && has_motion[p] && ca < cb) {
+          const PartOutline& now = outlines[p];
+          const PartImageAxis& before = (*previous)[p];
+          for (int x = ((ca + step - 1) / step) * step; x < cb; x += step) {
+            const FlowPoint* point = evidence.flow().at(x, y);
+            if (!point) continue;
+            // Where this point of the part was in the previous frame.
+            const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
+            const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
+                                             flow_scale[p] * from;
+            flow_sum[p] += FlowField::logRatio(*point, static_cast<float>(x - was.real()),
+                                               static_cast<float>(y - was.imag()));
+            ++flow_count[p];
+          }
+        }
+      }
+    }
+  }
+  double total = 0;
+  for (int p = 0; p < kParts; ++p) {
+    const int pixels = inside[p] + outside[p];
+    PartScore score;
+    score.pixels = pixels;
+    score.flow_points = flow_count[p];
+    if (pixels >= options.min_part_pixels) {
+      score.appearance = (appearance_sum[p] + options.outside_ratio * outside[p]) / pixels;
+      total += options.appearance_weight * score.appearance;
+    }
+    if (flow_count[p] > 0) {
+      score.flow = flow_sum[p] / flow_count[p];
+      total += options.flow_weight * score.flow;
+    }
+    if (scores) (*scores)[p] = score;
+  }
+  return total;
+}
+
+}  // namespace kneed_walker::core::vision

@@ -1,0 +1,332 @@
+// track_offline: the tracker (paper §4) on a recorded sequence, frame by frame, deterministic for
+// a seed: a rosbag (image + camera_info topics; the camera's pose from /tf_static or a camera
+// file) or a video with a camera file. Writes the MAP joints per frame as CSV
+// `frame,stamp,joint,x,y,z` (the synthetic ground truth's format), optionally an overlay video,
+// and prints the timing.
+//
+//   rosrun kneed_walker track_offline --bag seq.bag --camera seq_camera.yml --init-box 300 200 350 320
+//       --out-csv estimate.csv [--overlay overlay.avi]                                 (one line)
+//   rosrun kneed_walker track_offline --video vtest.avi --camera View_001_camera.yml
+//       --boxes View_001_person_boxes.csv --first-frame 600 --out-csv estimate.csv    (one line)
+#include <CLI/CLI.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <ros/package.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "kneed_walker/core/tracking/tracker.h"
+#include "kneed_walker/core/vision/overlay.h"
+#include "kneed_walker/ros/conversions.h"
+
+namespace kw = kneed_walker::core;
+
+namespace {
+
+// A sequence of frames that can be read again from its start.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual void rewind() = 0;
+  // The next BGR frame and its stamp (s); false at the end.
+  virtual bool next(cv::Mat& bgr, double& stamp_s) = 0;
+  virtual int count() const = 0;
+};
+
+class VideoSource : public FrameSource {
+ public:
+  VideoSource(const std::string& path, double fps) : path_(path), fps_(fps) { rewind(); }
+  void rewind() override {
+    video_.open(path_);
+    if (!video_.isOpened()) throw std::runtime_error(path_ + ": cannot open the video");
+    if (!(fps_ > 0)) fps_ = video_.get(cv::CAP_PROP_FPS);
+    if (!(fps_ > 0)) throw std::runtime_error(path_ + ": the video has no frame rate; give --fps");
+    index_ = 0;
+  }
+  bool next(cv::Mat& bgr, double& stamp_s) override {
+    if (!video_.read(bgr)) return false;
+    stamp_s = index_++ / fps_;
+    return true;
+  }
+  int count() const override { return static_cast<int>(video_.get(cv::CAP_PROP_FRAME_COUNT)); }
+
+ private:
+  std::string path_;
+  double fps_;
+  cv::VideoCapture video_;
+  int index_ = 0;
+};
+
+class BagSource : public FrameSource {
+ public:
+  BagSource(const std::string& path, const std::string& topic) : topic_(topic) {
+    bag_.open(path, rosbag::bagmode::Read);
+    rewind();
+    count_ = static_cast<int>(view_->size());
+    if (count_ == 0) throw std::runtime_error(path + ": no messages on " + topic);
+  }
+  void rewind() override {
+    view_ = std::make_unique<rosbag::View>(bag_, rosbag::TopicQuery(topic_));
+    it_ = view_->begin();
+  }
+  bool next(cv::Mat& bgr, double& stamp_s) override {
+    for (; it_ != view_->end(); ++it_) {
+      const sensor_msgs::Image::ConstPtr image = it_->instantiate<sensor_msgs::Image>();
+      if (!image) continue;
+      bgr = cv_bridge::toCvCopy(image, "bgr8")->image;
+      stamp_s = image->header.stamp.toSec();
+      ++it_;
+      return true;
+    }
+    return false;
+  }
+  int count() const override { return count_; }
+  rosbag::Bag& bag() { return bag_; }
+
+ private:
+  std::string topic_;
+  rosbag::Bag bag_;
+  std::unique_ptr<rosbag::View> view_;
+  rosbag::View::iterator it_;
+  int count_ = 0;
+};
+
+// The camera of a bag: its first camera_info and the /tf_static transform to its frame.
+kw::vision::Camera bagCamera(rosbag::Bag& bag, const std::string& info_topic, const std::string& world_frame) {
+  sensor_msgs::CameraInfo::ConstPtr info;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(info_topic)))
+    if ((info = m.instantiate<sensor_msgs::CameraInfo>())) break;
+  if (!info) throw std::runtime_error("the bag has no camera_info on " + info_topic + "; give --camera");
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/tf_static"))) {
+    const tf2_msgs::TFMessage::ConstPtr tf = m.instantiate<tf2_msgs::TFMessage>();
+    if (!tf) continue;
+    for (const auto& t : tf->transforms)
+      if (t.header.frame_id == world_frame && t.child_frame_id == info->header.frame_id)
+        return kneed_walker::ros_glue::toCamera(*info, t);
+  }
+  throw std::runtime_error("the bag has no /tf_static from " + world_frame + " to " + info->header.frame_id +
+                           "; give --camera");
+}
+
+// The best-scoring box of `frame` in a boxes CSV (frame,x1,y1,x2,y2,score,...).
+std::optional<cv::Rect2d> boxOf(const std::string& path, int frame) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read the boxes");
+  std::string line;
+  std::getline(in, line);
+  std::optional<cv::Rect2d> best;
+  double best_score = -1;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(fields, cell, ',')) v.push_back(std::atof(cell.c_str()));
+    if (v.size() < 6 || static_cast<int>(v[0]) != frame || v[5] <= best_score) continue;
+    best_score = v[5];
+    best = cv::Rect2d(cv::Point2d(v[1], v[2]), cv::Point2d(v[3], v[4]));
+  }
+  return best;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Tracks a walking person in a bag or video with the Kneed Walker; writes the MAP joints as CSV."};
+  std::string bag_path, video_path, camera_path, image_topic = "/camera/image_raw",
+              info_topic = "/camera/camera_info", world_frame = "world", out_csv, overlay_path, boxes_path,
+              background_path;
+  const std::string share = ros::package::getPath("kneed_walker");
+  std::string table_path = share + "/config/prior_gait_table.yaml", prior_path = share + "/config/prior.yaml",
+              walker_model = share + "/config/walker_model.yaml";
+  double camera_unit_m = 0.001, fps = 0;
+  std::vector<double> init_box, init_position;
+  kw::tracking::InitialGuess guess;
+  bool heading_given = false;
+  int first_frame = 0, max_frames = 0, background_samples = 25;
+  bool no_flow = false;
+  kw::tracking::TrackerOptions options;
+  kw::vision::LikelihoodOptions likelihood;
+  auto* input = app.add_option_group("input", "one of --bag, --video");
+  input->add_option("--bag", bag_path, "rosbag with image and camera_info topics")->check(CLI::ExistingFile);
+  input->add_option("--video", video_path, "video file (with --camera)")->check(CLI::ExistingFile);
+  input->require_option(1);
+  app.add_option("--camera", camera_path, "calibration (OpenCV YAML; may hold the ground plane); a bag's camera_info + /tf_static otherwise")
+      ->check(CLI::ExistingFile);
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str();
+  app.add_option("--image-topic", image_topic, "the bag's image topic")->capture_default_str();
+  app.add_option("--info-topic", info_topic, "the bag's camera_info topic")->capture_default_str();
+  app.add_option("--fps", fps, "video frame rate (default: the container's)");
+  app.add_option("--init-box", init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4);
+  app.add_option("--boxes", boxes_path, "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box")
+      ->check(CLI::ExistingFile);
+  app.add_option("--init-position", init_position, "ground position X Y (m) instead of a box")->expected(2);
+  app.add_option("--init-position-sd", guess.position_sd_m, "spread of the initial position, m")->capture_default_str();
+  app.add_option("--init-heading", guess.heading_rad, "walking direction, rad from +X towards +Y (default: unknown)")
+      ->each([&](const std::string&) { heading_given = true; });
+  app.add_option("--init-heading-sd", guess.heading_sd_rad, "spread of the heading, rad")->capture_default_str();
+  app.add_option("--min-speed", guess.min_speed_kmh, "slowest initial walking speed, km/h")->capture_default_str();
+  app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str();
+  app.add_option("--particles", options.num_particles, "particles")->capture_default_str();
+  app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)");
+  app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str();
+  app.add_option("--seed", options.seed, "random seed")->capture_default_str();
+  app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str();
+  app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str();
+  app.add_option("--frames", max_frames, "track at most this many frames (0: all)");
+  app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
+      ->capture_default_str();
+  app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
+  app.add_flag("--no-flow", no_flow, "leave the optical flow out of the likelihood");
+  app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str();
+  app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str();
+  app.add_option("--flow-min-sd", likelihood.flow.min_sd_px, "floor of the flow's SD, px")->capture_default_str();
+  app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--out-csv", out_csv, "MAP joints per frame (frame,stamp,joint,x,y,z)")->required();
+  app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
+  CLI11_PARSE(app, argc, argv);
+  if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
+
+  try {
+    std::unique_ptr<FrameSource> source;
+    std::optional<kw::vision::Camera> camera;
+    if (!bag_path.empty()) {
+      auto bag = std::make_unique<BagSource>(bag_path, image_topic);
+      if (camera_path.empty()) camera = bagCamera(bag->bag(), info_topic, world_frame);
+      source = std::move(bag);
+    } else {
+      if (camera_path.empty()) throw std::runtime_error("--video needs --camera");
+      source = std::make_unique<VideoSource>(video_path, fps);
+    }
+    if (!camera_path.empty()) camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    const kw::vision::GroundPlane ground =
+        camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(camera_path);
+    options.ground_slope_rad = ground.slope_rad;
+    const kw::gait::GaitTable table =
+        kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
+    likelihood.use_flow = !no_flow;
+    kw::tracking::Tracker tracker(*camera, ground, table, kw::prior::loadPriorOptions(prior_path), options, likelihood);
+
+    // The background: an image, or per-pixel statistics of frames spread over the input.
+    const int total = source->count();
+    if (!background_path.empty()) {
+      cv::Mat image = cv::imread(background_path);
+      tracker.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
+    } else {
+      std::vector<cv::Mat> samples;
+      const int n = std::max(1, std::min(background_samples, total));
+      cv::Mat frame;
+      double stamp;
+      for (int index = 0, next = 0; static_cast<int>(samples.size()) < n && source->next(frame, stamp); ++index) {
+        if (index == next) {
+          samples.push_back(frame.clone());
+          next = n == 1 ? total : static_cast<int>(static_cast<long>(samples.size()) * (total - 1) / (n - 1));
+        }
+      }
+      tracker.setBackground(kw::vision::BackgroundModel::learn(samples, likelihood.background));
+      source->rewind();
+    }
+
+    std::ofstream csv(out_csv);
+    if (!csv) throw std::runtime_error(out_csv + ": cannot write");
+    csv << "frame,stamp,joint,x,y,z\n" << std::fixed;
+    cv::VideoWriter overlay;
+    std::vector<double> total_ms, precompute_ms, particles_ms;
+    const bool tty = isatty(STDERR_FILENO);
+    cv::Mat frame;
+    double stamp = 0;
+    int index = -1, tracked = 0, lost = 0;
+    while (source->next(frame, stamp)) {
+      ++index;
+      if (index < first_frame) continue;
+      if (max_frames > 0 && tracked >= max_frames) break;
+      kw::tracking::TrackEstimate estimate;
+      if (!tracker.started()) {
+        if (!init_position.empty()) {
+          guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
+          if (!heading_given) guess.heading_sd_rad = M_PI;
+        } else {
+          std::optional<cv::Rect2d> box;
+          if (!init_box.empty()) box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
+          else if (!boxes_path.empty()) box = boxOf(boxes_path, index);
+          else throw std::runtime_error("give --init-box, --boxes or --init-position");
+          if (!box) throw std::runtime_error("no box for frame " + std::to_string(index) + " in " + boxes_path);
+          const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *box);
+          guess.position_m = from_box.position_m;
+          if (!heading_given) guess.heading_sd_rad = M_PI;
+        }
+        estimate = tracker.start(frame, stamp, guess);
+      } else {
+        estimate = tracker.track(frame, stamp);
+      }
+      const kw::tracking::TrackerTiming& timing = tracker.timing();
+      if (tracked > 0) {
+        total_ms.push_back(timing.total_ms);
+        precompute_ms.push_back(timing.precompute_ms);
+        particles_ms.push_back(timing.particles_ms);
+      }
+      lost += estimate.lost;
+      for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
+        const Eigen::Vector3d& p = estimate.pose.joints[j];
+        csv << index << ',' << std::setprecision(6) << stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
+            << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+      }
+      if (!overlay_path.empty()) {
+        if (!overlay.isOpened()) {
+          overlay.open(overlay_path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, frame.size());
+          if (!overlay.isOpened()) throw std::runtime_error(overlay_path + ": cannot write the video");
+        }
+        std::vector<Eigen::Vector2f> cloud;
+        for (const auto& p : tracker.particles())
+          if (const auto px = camera->project(p.joints[kw::body::kWaist].cast<double>())) cloud.push_back(px->cast<float>());
+        kw::vision::BodyOutlines outlines;
+        tracker.project(estimate.pose, outlines);
+        cv::Mat picture = frame.clone();
+        kw::vision::drawOverlay(picture, *camera, estimate.pose, outlines, cloud);
+        cv::putText(picture, cv::format("frame %d  N_eff %.0f  %.1f km/h%s", index, estimate.effective_sample_size,
+                                        estimate.speed_kmh, estimate.lost ? "  LOST" : ""),
+                    {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+        overlay.write(picture);
+      }
+      ++tracked;
+      const int todo = max_frames > 0 ? std::min(max_frames, total - first_frame) : total - first_frame;
+      const int width = 30, filled = todo > 0 ? std::min(width, width * tracked / todo) : width;
+      std::fprintf(stderr, "%s[%s%s] %d/%d frames, %.0f ms/frame, N_eff %.0f%s", tty ? "\r" : "",
+                   std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), tracked, todo,
+                   timing.total_ms, estimate.effective_sample_size, tty ? "" : "\n");
+    }
+    if (tty) std::fprintf(stderr, "\n");
+    if (tracked == 0) throw std::runtime_error("no frame was tracked");
+    std::printf("frames=%d lost_frames_reported=%d particles=%d\n", tracked, lost, options.num_particles);
+    std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
+                median(precompute_ms), median(particles_ms));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "track_offline: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
