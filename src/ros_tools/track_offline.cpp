@@ -28,6 +28,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -166,7 +167,7 @@ int main(int argc, char** argv) {
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
   int first_frame = 0, max_frames = 0, background_samples = 25;
-  bool no_flow = false;
+  bool no_flow = false, filtered = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
   auto* input = app.add_option_group("input", "one of --bag, --video");
@@ -187,10 +188,17 @@ int main(int argc, char** argv) {
   app.add_option("--init-heading", guess.heading_rad, "walking direction, rad from +X towards +Y (default: unknown)")
       ->each([&](const std::string&) { heading_given = true; });
   app.add_option("--init-heading-sd", guess.heading_sd_rad, "spread of the heading, rad")->capture_default_str();
+  std::string init_stance;
+  app.add_option("--init-stance", init_stance, "the leg on the ground in the first frame: left or right (default: unknown)")
+      ->check(CLI::IsMember({"left", "right"}));
   app.add_option("--min-speed", guess.min_speed_kmh, "slowest initial walking speed, km/h")->capture_default_str();
   app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str();
   app.add_option("--particles", options.num_particles, "particles")->capture_default_str();
   app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)");
+  app.add_option("--resample-lag", options.resample_lag_frames, "Δs: resample from this many frames back")
+      ->capture_default_str();
+  app.add_option("--resample-mixing", options.resample_mixing, "γ: weight of the newest weights in the proposal")
+      ->capture_default_str();
   app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str();
   app.add_option("--seed", options.seed, "random seed")->capture_default_str();
   app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str();
@@ -199,6 +207,9 @@ int main(int argc, char** argv) {
   app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
       ->capture_default_str();
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
+  app.add_flag("--filtered", filtered,
+               "write each frame's best particle as it comes, instead of the MAP state sequence (the best "
+               "particle's ancestry, each frame written Δs frames later)");
   app.add_flag("--no-flow", no_flow, "leave the optical flow out of the likelihood");
   app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str();
   app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str();
@@ -210,6 +221,7 @@ int main(int argc, char** argv) {
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
+  if (!init_stance.empty()) guess.stance_leg = init_stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
 
   try {
     std::unique_ptr<FrameSource> source;
@@ -254,12 +266,24 @@ int main(int argc, char** argv) {
     std::ofstream csv(out_csv);
     if (!csv) throw std::runtime_error(out_csv + ": cannot write");
     csv << "frame,stamp,joint,x,y,z\n" << std::fixed;
+    std::map<int, std::pair<int, double>> inputs;  // tracker frame -> input frame index, stamp
+    int written = -1;                               // the last tracker frame written
+    auto writePose = [&](int frame, const kw::body::BodyPose& pose) {
+      if (frame <= written) return;
+      written = frame;
+      const auto [input, input_stamp] = inputs.at(frame);
+      for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
+        const Eigen::Vector3d& p = pose.joints[j];
+        csv << input << ',' << std::setprecision(6) << input_stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
+            << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+      }
+    };
     cv::VideoWriter overlay;
     std::vector<double> total_ms, precompute_ms, particles_ms;
     const bool tty = isatty(STDERR_FILENO);
     cv::Mat frame;
     double stamp = 0;
-    int index = -1, tracked = 0, lost = 0;
+    int index = -1, tracked = 0, lost = 0, resampled = 0;
     while (source->next(frame, stamp)) {
       ++index;
       if (index < first_frame) continue;
@@ -290,10 +314,15 @@ int main(int argc, char** argv) {
         particles_ms.push_back(timing.particles_ms);
       }
       lost += estimate.lost;
-      for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
-        const Eigen::Vector3d& p = estimate.pose.joints[j];
-        csv << index << ',' << std::setprecision(6) << stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
-            << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+      resampled += estimate.resampled;
+      inputs[estimate.frame] = {index, stamp};
+      if (filtered) {
+        writePose(estimate.frame, estimate.pose);
+      } else {
+        // The MAP state sequence: a frame is written once Δs later frames have weighed its particles.
+        std::vector<int> frames;
+        const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
+        if (static_cast<int>(frames.size()) == options.resample_lag_frames + 1) writePose(frames.front(), poses.front());
       }
       if (!overlay_path.empty()) {
         if (!overlay.isOpened()) {
@@ -321,7 +350,13 @@ int main(int argc, char** argv) {
     }
     if (tty) std::fprintf(stderr, "\n");
     if (tracked == 0) throw std::runtime_error("no frame was tracked");
-    std::printf("frames=%d lost_frames_reported=%d particles=%d\n", tracked, lost, options.num_particles);
+    if (!filtered) {
+      std::vector<int> frames;
+      const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
+      for (size_t i = 0; i < frames.size(); ++i) writePose(frames[i], poses[i]);
+    }
+    std::printf("frames=%d lost_frames_reported=%d resampled_frames=%d particles=%d\n", tracked, lost, resampled,
+                options.num_particles);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));
   } catch (const std::exception& e) {

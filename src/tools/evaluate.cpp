@@ -6,9 +6,11 @@
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150)
 //   footskate_mm=            mean horizontal slide of the estimated stance foot (the lower ankle,
 //                            on the ground: within --contact-mm of its lowest height) between
-//                            adjacent frames while it stays the stance foot
+//                            adjacent frames while it stays the stance foot. The walker's feet
+//                            roll, so its stance ankle moves even without slip: the truth's own
+//                            figure (truth_footskate_mm=) is the reference
 //   ground_penetration_mm=   mean depth of the estimated soles (ankle less --ankle-height) below
-//                            the ground
+//                            the ground (truth_ground_penetration_mm= the truth's)
 // and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
 //
 //   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--ground CAMERA.yml] [--lost-mm 150]
@@ -104,34 +106,44 @@ int main(int argc, char** argv) {
       lost += 1000 * frame_sum / frame_count > lost_mm;
     }
     if (frames == 0) throw std::runtime_error("no frame with common joints in both files");
-    // Foot skate and penetration of the estimate.
-    double skate = 0, penetration = 0;
-    int skate_count = 0, penetration_count = 0;
-    const Pose* previous = nullptr;
-    std::string previous_foot;
-    for (const auto& [frame, pose] : estimate) {
-      if (!pose.count("l_ankle") || !pose.count("r_ankle")) {
-        previous = nullptr;
-        continue;
+    // Foot skate and penetration, of the estimate and (for reference) of the truth.
+    struct Contact {
+      double skate_mm = 0, penetration_mm = 0;
+    };
+    auto contact = [&](const std::map<int, Pose>& poses) {
+      double skate = 0, penetration = 0;
+      int skate_count = 0, penetration_count = 0;
+      const Pose* previous = nullptr;
+      std::string previous_foot;
+      for (const auto& [frame, pose] : poses) {
+        if (!pose.count("l_ankle") || !pose.count("r_ankle")) {
+          previous = nullptr;
+          continue;
+        }
+        auto above = [&](const Eigen::Vector3d& p) { return p.z() - ground.height(p.head<2>()); };
+        const Eigen::Vector3d &l = pose.at("l_ankle"), &r = pose.at("r_ankle");
+        const std::string foot = above(l) <= above(r) ? "l_ankle" : "r_ankle";
+        const double lowest = std::min(above(l), above(r));
+        penetration += std::max(0.0, -(lowest - ankle_height_m));
+        ++penetration_count;
+        const bool on_ground = lowest - ankle_height_m < contact_mm / 1000;
+        if (previous && on_ground && foot == previous_foot)
+          skate += (pose.at(foot) - previous->at(foot)).head<2>().norm(), ++skate_count;
+        previous = on_ground ? &pose : nullptr;
+        previous_foot = foot;
       }
-      auto above = [&](const Eigen::Vector3d& p) { return p.z() - ground.height(p.head<2>()); };
-      const Eigen::Vector3d &l = pose.at("l_ankle"), &r = pose.at("r_ankle");
-      const std::string foot = above(l) <= above(r) ? "l_ankle" : "r_ankle";
-      const double lowest = std::min(above(l), above(r));
-      penetration += std::max(0.0, -(lowest - ankle_height_m));
-      ++penetration_count;
-      const bool contact = std::abs(above(pose.at(foot)) - lowest) < 1e-9 && lowest - ankle_height_m < contact_mm / 1000;
-      if (previous && contact && foot == previous_foot)
-        skate += (pose.at(foot) - previous->at(foot)).head<2>().norm(), ++skate_count;
-      previous = contact ? &pose : nullptr;
-      previous_foot = foot;
-    }
+      return Contact{skate_count ? 1000 * skate / skate_count : 0.0,
+                     penetration_count ? 1000 * penetration / penetration_count : 0.0};
+    };
+    const Contact estimated = contact(estimate), true_contact = contact(truth);
     std::printf("frames=%d joints=%d\n", frames, count / frames);
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);
     std::printf("root_relative_error_mm=%.1f\n", 1000 * root_sum / count);
     std::printf("lost_frames=%d\n", lost);
-    std::printf("footskate_mm=%.2f\n", skate_count ? 1000 * skate / skate_count : 0.0);
-    std::printf("ground_penetration_mm=%.2f\n", penetration_count ? 1000 * penetration / penetration_count : 0.0);
+    std::printf("footskate_mm=%.2f\n", estimated.skate_mm);
+    std::printf("ground_penetration_mm=%.2f\n", estimated.penetration_mm);
+    std::printf("truth_footskate_mm=%.2f\n", true_contact.skate_mm);
+    std::printf("truth_ground_penetration_mm=%.2f\n", true_contact.penetration_mm);
     for (const auto& [joint, e] : per_joint) std::printf("error_mm_%s=%.1f\n", joint.c_str(), 1000 * e.first / e.second);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

@@ -70,6 +70,8 @@ WalkerSimulator::WalkerSimulator(const WalkerModel& model, const SimulationOptio
     throw std::invalid_argument("SimulationOptions.max_step must lie in (0, 0.2] natural time units");
   if (!(options.event_time_tolerance > 0 && options.event_time_tolerance < options.max_step))
     throw std::invalid_argument("SimulationOptions.event_time_tolerance must lie in (0, max_step)");
+  if (options.max_events_per_advance < 1)
+    throw std::invalid_argument("SimulationOptions.max_events_per_advance must be >= 1");
   if (!(model.gravity > 0 && model.legLength() > 0))
     throw std::invalid_argument("WalkerModel needs gravity > 0 and a positive leg length");
   natural_time_ = std::sqrt(model.legLength() / model.gravity);
@@ -292,7 +294,8 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
     for (int k = 0; k < kNumKnees; ++k)
       if (state.knee_on_limit[k] && kneeFlexion(state.q, k) > 1e-12) state.knee_on_limit[k] = false;
 
-    if (hasFallen(state, at_state)) {
+    if (hasFallen(state, at_state) ||
+        report.heel_strikes + report.knee_limit_events > options_.max_events_per_advance) {
       state.fallen = true;
       report.fell = true;
       return report;

@@ -19,9 +19,11 @@ body::BodyPose BodyPrior::pose(const BodyParticle& p) const {
 }
 
 BodyParticle BodyPrior::sample(double phase, const Eigen::Vector2d& stance_foot_xy_m, double heading_rad,
-                               common::Random& random, body::BodyPose& pose) const {
+                               common::Random& random, body::BodyPose& pose,
+                               std::optional<dynamics::Leg> stance_leg) const {
   BodyParticle p;
   p.walker = walker_prior_.sample(phase, random);
+  if (stance_leg) p.walker.walker.stance_leg = *stance_leg;
   p.placement.value.heading_rad = heading_rad;
   const Eigen::Vector2d heading(std::cos(heading_rad), std::sin(heading_rad));
   const dynamics::Point foot = dynamics::stanceFootCentre(walker_prior_.simulator().map(), p.walker.walker.q,

@@ -23,6 +23,9 @@ double msSince(Clock::time_point start) {
 // the best particle explains the image worse than the background does.
 constexpr int kLostAfterFrames = 3;
 
+// The probability that a particle's new stride walks around a neighbouring gait of the table.
+constexpr double kGaitChangeProbability = 0.3;
+
 }  // namespace
 
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
@@ -77,6 +80,14 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   }
   if (bank_.empty())
     throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope");
+  // Neighbours: a stride may move to a gait one grid step away in speed and step length.
+  const double speed_step = (grid.speeds_kmh[1] - grid.speeds_kmh[0]) * froude_speed;
+  const double length_step = (grid.step_lengths_m[1] - grid.step_lengths_m[0]) * leg_m / grid.referenceLegLength();
+  for (size_t a = 0; a < bank_.size(); ++a)
+    for (size_t b = 0; b < bank_.size(); ++b)
+      if (a != b && std::abs(bank_[a].speed_kmh - bank_[b].speed_kmh) < 1.01 * speed_step &&
+          std::abs(bank_[a].step_length_m - bank_[b].step_length_m) < 1.01 * length_step)
+        bank_[a].neighbours.push_back(static_cast<int>(b));
 }
 
 Tracker::~Tracker() = default;
@@ -194,6 +205,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   frames_lost_ = 0;
   evidence_.clear();
   evidence_frames_.clear();
+  evidence_dt_s_.clear();
   cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
 
   // The region the guess can reach: its spread around the position, the person's height up.
@@ -213,6 +225,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   evidence_.push_back(std::make_unique<vision::FrameEvidence>());
   evidence_.back()->compute(bgr, cv::Mat(), roi, background_, appearance_, likelihood_);
   evidence_frames_.push_back(0);
+  evidence_dt_s_.push_back(0.0);
   timing_ = TrackerTiming{};
   timing_.precompute_ms = msSince(precompute_at);
 
@@ -232,8 +245,11 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
         const double heading = guess.heading_sd_rad >= M_PI
                                    ? std::uniform_real_distribution<double>(-M_PI, M_PI)(random)
                                    : guess.heading_rad + guess.heading_sd_rad * normal(random);
+        const dynamics::Leg stance =
+            guess.stance_leg ? *guess.stance_leg
+                             : std::bernoulli_distribution(0.5)(random) ? dynamics::Leg::kLeft : dynamics::Leg::kRight;
         body::BodyPose unused;
-        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused);
+        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused, stance);
         return p;
       },
       [&](TrackerParticle& p, int frame) { return weigh(p, frame, bank_[p.gait].prior->pose(p.body)); }, 0);
@@ -256,9 +272,11 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   evidence->compute(bgr, previous_grey_, regionOfInterest(), background_, appearance_, likelihood_);
   evidence_.push_back(std::move(evidence));
   evidence_frames_.push_back(frame_);
+  evidence_dt_s_.push_back(dt_s_);
   while (static_cast<int>(evidence_.size()) > options_.resample_lag_frames + 1) {
     evidence_.erase(evidence_.begin());
     evidence_frames_.erase(evidence_frames_.begin());
+    evidence_dt_s_.erase(evidence_dt_s_.begin());
   }
   cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
   timing_ = TrackerTiming{};
@@ -266,20 +284,41 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
 
   // Frames buffered for resampling may have other intervals; each particle step uses the
   // interval into its frame.
-  const double dt = dt_s_;
   const auto particles_at = Clock::now();
-  double resample_ms = 0;
+  dynamics_ns_ = likelihood_ns_ = steps_ = 0;
   const FilterStepReport report = filter_->step(
-      [&](TrackerParticle& p, int frame, common::Random& random) {
-        body::BodyPose pose;
-        bank_[p.gait].prior->transition(p.body, dt, random, pose);
-        return weigh(p, frame, pose);
-      },
-      frame_);
-  (void)resample_ms;
+      [&](TrackerParticle& p, int frame, common::Random& random) { return propagate(p, frame, random); }, frame_);
   timing_.particles_ms = msSince(particles_at);
+  timing_.resample_ms = report.resample_ms;
+  timing_.dynamics_cpu_ms = 1e-6 * dynamics_ns_;
+  timing_.likelihood_cpu_ms = 1e-6 * likelihood_ns_;
+  timing_.particle_steps = steps_;
+  frames_lost_ = report.max_log_likelihood < 0 || !std::isfinite(report.max_log_likelihood) ? frames_lost_ + 1 : 0;
   timing_.total_ms = msSince(started_at);
   return estimate(report);
+}
+
+double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random) {
+  // Frames buffered for resampling may have other intervals: each step uses its own frame's.
+  double dt = dt_s_;
+  for (size_t i = 0; i < evidence_frames_.size(); ++i)
+    if (evidence_frames_[i] == frame) dt = evidence_dt_s_[i];
+  const auto t0 = Clock::now();
+  // Speed changes inside a track: after a heel strike the new stride may walk around a
+  // neighbouring gait of the table (its stride samples are drawn from that gait's optimum).
+  const std::vector<int>& neighbours = bank_[p.gait].neighbours;
+  if (p.body.walker.walker.heel_strikes != p.body.walker.stride_of_means && !neighbours.empty() &&
+      std::bernoulli_distribution(kGaitChangeProbability)(random))
+    p.gait = neighbours[std::uniform_int_distribution<int>(0, static_cast<int>(neighbours.size()) - 1)(random)];
+  body::BodyPose pose;
+  bank_[p.gait].prior->transition(p.body, dt, random, pose);
+  const auto t1 = Clock::now();
+  const double log_likelihood = weigh(p, frame, pose);
+  const auto t2 = Clock::now();
+  dynamics_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
+  likelihood_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(t2 - t1).count();
+  ++steps_;
+  return log_likelihood;
 }
 
 std::vector<body::BodyPose> Tracker::mapPoses(std::vector<int>* frames) const {
@@ -299,6 +338,7 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   const int best = filter_->best();
   e.pose = pose(particles[best]);
   e.map_log_likelihood = particles[best].log_likelihood;
+  e.lost = frames_lost_ >= kLostAfterFrames;
   e.speed_kmh = bank_[particles[best].gait].speed_kmh;
   e.heading_rad = particles[best].body.placement.value.heading_rad;
   // Weighted spreads.

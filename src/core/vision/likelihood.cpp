@@ -162,6 +162,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   const cv::Rect roi = evidence.roi();
   const int step = flow ? evidence.flow().step() : 1;
   const int roi_right = roi.x + roi.width, roi_bottom = roi.y + roi.height;
+  const float flow_limit = static_cast<float>(options.flow_ratio_limit);
   std::array<Interval, kParts> covered;
   std::array<Interval, kParts + 1> pieces, next;
   for (int y = top; y < bottom; ++y) {
@@ -212,8 +213,9 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
             const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
             const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
                                              flow_scale[p] * from;
-            flow_sum[p] += FlowField::logRatio(*point, static_cast<float>(x - was.real()),
-                                               static_cast<float>(y - was.imag()));
+            flow_sum[p] += std::clamp(FlowField::logRatio(*point, static_cast<float>(x - was.real()),
+                                                          static_cast<float>(y - was.imag())),
+                                      -flow_limit, flow_limit);
             ++flow_count[p];
           }
         }

@@ -45,14 +45,20 @@ TEST(WalkerSimulation, TorquesChangeEnergyByExactlyTheirWork) {
   EXPECT_NEAR(change, integrals.work, 1e-8 * std::abs(integrals.work));
 }
 
-TEST(WalkerSimulation, PassiveStridesOnlyLoseEnergyAtEvents) {
-  const WalkerSimulator sim(mcGeerPassiveWalker());
-  WalkerControls passive;
-  passive.ground_slope = -0.0456;
+// Near McGeer's passive gait, just after a heel strike, knees locked.
+WalkerState nearMcGeersGait() {
   WalkerState s;
   s.q << 0, 0.28, 0.28, -0.45, -0.45;
   s.qdot << 0, -0.36, -0.36, 0.09, 0.09;
   s.knee_on_limit = {true, true};
+  return s;
+}
+
+TEST(WalkerSimulation, PassiveStridesOnlyLoseEnergyAtEvents) {
+  const WalkerSimulator sim(mcGeerPassiveWalker());
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  WalkerState s = nearMcGeersGait();
   for (int stride = 0; stride < 10; ++stride) {
     const StrideResult r = sim.stride(passive, s);
     ASSERT_TRUE(r.completed) << "stride " << stride;
@@ -158,6 +164,28 @@ TEST(WalkerSimulation, AFallIsDetectedAndFreezesTheState) {
   const WalkerState frozen = s;
   EXPECT_TRUE(sim.advance(WalkerControls{}, s, 0.1).fell);
   EXPECT_EQ(s.q, frozen.q);
+}
+
+// Events without end (knee limits chattering ever faster) must not hang a particle: more events
+// than max_events_per_advance in one advance freeze the walker as fallen.
+TEST(WalkerSimulation, TooManyEventsInOneAdvanceCountAsAFall) {
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  const WalkerState start = nearMcGeersGait();
+  const WalkerSimulator free(mcGeerPassiveWalker());
+  WalkerState s = start;
+  const AdvanceReport walked = free.advance(passive, s, 12.0);
+  ASSERT_FALSE(walked.fell);
+  const int events = walked.heel_strikes + walked.knee_limit_events;
+  ASSERT_GT(events, 3);
+  SimulationOptions capped;
+  capped.max_events_per_advance = events - 1;
+  const WalkerSimulator strict(mcGeerPassiveWalker(), capped);
+  s = start;
+  const AdvanceReport stopped = strict.advance(passive, s, 12.0);
+  EXPECT_TRUE(stopped.fell);
+  EXPECT_TRUE(s.fallen);
+  EXPECT_EQ(stopped.heel_strikes + stopped.knee_limit_events, events);
 }
 
 }  // namespace

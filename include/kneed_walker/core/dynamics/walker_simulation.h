@@ -52,6 +52,9 @@ struct SimulationOptions {
   double knee_sticking_rate = 1e-3;   // a knee leaving its limit slower stays on it, rad per natural time
   double passing_window = 0.15;       // the swing foot passes the stance foot within ± this × leg length
   double clearance_margin = 0.01;     // swing-sole height below which passing counts as scuffing, × leg length
+  // More events than this in one advance() (knee limits chattering ever faster: a Zeno
+  // sequence that some noisy particle states reach) freeze the walker as fallen.
+  int max_events_per_advance = 200;
 };
 
 struct AdvanceReport {

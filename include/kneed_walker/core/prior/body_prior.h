@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include <optional>
+
 #include "kneed_walker/core/body/body_model.h"
 #include "kneed_walker/core/prior/walker_prior.h"
 
@@ -29,9 +31,12 @@ class BodyPrior {
 
   // A particle at `phase` ∈ [0, 1) of the gait's stride with fresh samples, walking along
   // `heading_rad` with its stance foot's centre above `stance_foot_xy_m`; `pose` receives its
-  // body pose. Draws the walker's samples first, as WalkerPrior::sample.
+  // body pose. Draws the walker's samples first, as WalkerPrior::sample. The gait's strides
+  // start on the left leg; `stance_leg` relabels the legs (the walker is symmetric: the other
+  // leg's stance is the same motion half a gait cycle on).
   BodyParticle sample(double phase, const Eigen::Vector2d& stance_foot_xy_m, double heading_rad,
-                      common::Random& random, body::BodyPose& pose) const;
+                      common::Random& random, body::BodyPose& pose,
+                      std::optional<dynamics::Leg> stance_leg = std::nullopt) const;
 
   // s_t ~ p(s_t | s_{t−1}) over dt_s seconds; `pose` receives the body pose at t. Returns what the
   // walker did (a fall freezes it).

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <deque>
@@ -49,6 +50,7 @@ struct FilterStepReport {
   bool resampled = false;
   int resampled_from_frame = -1;     // t − Δs (or the oldest buffered frame)
   double max_log_likelihood = 0;     // of the frame's new observation, over the particles
+  double resample_ms = 0;            // wall time of the resampling, its re-propagation included
 };
 
 // A 64-bit mix of several integers (SplitMix64 steps): the seed of one chunk's generator.
@@ -116,8 +118,10 @@ class ParticleFilter {
     while (static_cast<int>(sets_.size()) > options_.resample_lag_frames + 1) sets_.pop_front();
     report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
     if (report.ess_before_resampling < options_.resample_ess_threshold) {
+      const auto started = std::chrono::steady_clock::now();
       resample(propagate, report);
       report.resampled = true;
+      report.resample_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
     }
     report.effective_sample_size = effectiveSampleSize(sets_.back().log_weights);
     return report;

@@ -28,10 +28,18 @@ struct LikelihoodOptions {
   FlowOptions flow;
   bool use_flow = true;
   double ratio_limit = 6.0;     // per-pixel appearance log ratios are clamped to ±this
+  // Per-point flow log ratios are clamped to ±this: DIS loses thin fast limbs (a swinging foot
+  // moves 30 px between frames at 10 fps), and one lost point must not outweigh a whole part.
+  double flow_ratio_limit = 4.0;
   double outside_ratio = -3.0;  // the log ratio a part's pixel scores outside the evidence's region or image
   int min_part_pixels = 6;      // a part with fewer visible pixels is left out (hidden)
-  double appearance_weight = 1.0;  // weight of each part's appearance average
-  double flow_weight = 1.0;        // weight of each part's flow average
+  // Weights of each part's appearance and flow averages. The paper sums the averages with
+  // weight 1; measured on the four synthetic sequences (2000 particles, 3 seeds; README
+  // "The tracker"), weight 1 collapses N_eff to a few particles every frame and loses the person
+  // in most runs (mean joint error 380–650 mm), 0.5 in some (145 mm on average), 0.3 least
+  // (85 mm; 0.15: 96 mm).
+  double appearance_weight = 0.3;
+  double flow_weight = 0.3;
 };
 
 class FrameEvidence {

@@ -1,0 +1,110 @@
+// bench_tracker: how fast the tracker runs. Renders a synthetic walk in memory (the prior's
+// walker over a textured ground seen by the given camera, 768×576 for the PETS calibration,
+// `--fps` frames per second), learns its background, then tracks it from a coarse start with
+// `--particles` particles on 1 thread and on all cores. Prints medians over the tracked frames:
+//   tracker_ms_per_frame=       wall time per frame
+//   per_frame_precompute_ms=    the frame's shared evidence (ratio maps, prefix sums, flow)
+//   dynamics_ms= likelihood_ms= thread time per frame in the prior's transitions and in pose +
+//                               projection + likelihood, summed over threads
+//   resample_ms=                wall time of resampling (with its re-propagation), per frame
+//   likelihood_us_per_particle= dynamics_us_per_particle=  per particle step
+//
+//   rosrun kneed_walker bench_tracker --camera ../shared/data/pets2009/View_001_camera.yml
+//          [--particles 5000] [--frames 40] [--fps 30]
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <vector>
+
+#include "kneed_walker/core/common/parallel.h"
+#include "kneed_walker/core/synthetic/synthetic_scene.h"
+#include "kneed_walker/core/tracking/tracker.h"
+#include "median.h"
+#include "package_files.h"
+
+namespace kw = kneed_walker::core;
+using kneed_walker::tools::median;
+
+int main(int argc, char** argv) {
+  CLI::App app{"Times the tracker per frame, split by stage."};
+  std::string camera_path;
+  std::string table_path = kneed_walker::tools::packageFile("config/prior_gait_table.yaml");
+  std::string prior_path = kneed_walker::tools::packageFile("config/prior.yaml");
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
+  double camera_unit_m = 0.001, fps = 30;
+  int particles = 5000, frames = 40;
+  app.add_option("--camera", camera_path, "calibration (OpenCV YAML)")->required()->check(CLI::ExistingFile);
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--particles", particles, "particles")->capture_default_str()->check(CLI::Range(10, 1000000));
+  app.add_option("--frames", frames, "frames tracked per run")->capture_default_str()->check(CLI::Range(3, 10000));
+  app.add_option("--fps", fps, "frame rate of the walk")->capture_default_str()->check(CLI::Range(1.0, 240.0));
+  app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const kw::vision::Camera camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    const kw::gait::GaitTable table = kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
+    const kw::prior::PriorOptions prior = kw::prior::loadPriorOptions(prior_path);
+    kw::synthetic::SyntheticWalkOptions walk_options;
+    const auto start = camera.groundPoint({0.7 * camera.width(), 0.8 * camera.height()});
+    if (!start) throw std::runtime_error("the camera does not see the ground at the walk's start");
+    walk_options.start_m = start->head<2>();
+    walk_options.heading_rad = 2.1;
+    walk_options.fps = fps;
+    walk_options.duration_s = frames / fps;
+    const kw::synthetic::SyntheticWalk walk = kw::synthetic::synthesizeWalk(table, prior, walk_options);
+    const cv::Mat ground = kw::synthetic::texturedGround(camera, walk.ground, 1);
+    std::vector<cv::Mat> empty, images;
+    for (int i = 0; i < 5; ++i) {
+      empty.push_back(ground.clone());
+      kw::synthetic::addSensorNoise(empty.back(), 3.0, 10 + i);
+    }
+    const kw::body::BodyShape shape = kw::body::BodyShape::forHeight(walk_options.person_height_m);
+    for (size_t i = 0; i < walk.frames.size(); ++i) {
+      images.push_back(ground.clone());
+      kw::synthetic::drawPerson(images.back(), camera, walk.frames[i].pose, shape, kw::synthetic::PersonAppearance{});
+      kw::synthetic::addSensorNoise(images.back(), 3.0, 100 + i);
+    }
+    const kw::vision::BackgroundModel background = kw::vision::BackgroundModel::learn(empty);
+    kw::tracking::InitialGuess guess;
+    guess.position_m = walk_options.start_m;
+    guess.heading_rad = walk_options.heading_rad;
+    guess.stance_leg = walk.frames[0].walker.stance_leg;
+
+    std::printf("%d particles, %zu frames of %dx%d at %.0f fps\n", particles, images.size(), camera.width(),
+                camera.height(), fps);
+    const int cores = kw::common::resolveThreads(0);
+    for (int threads : {1, cores}) {
+      kw::tracking::TrackerOptions options;
+      options.num_particles = particles;
+      options.resample_ess_threshold = particles / 10.0;
+      options.num_threads = threads;
+      kw::tracking::Tracker tracker(camera, walk.ground, table, prior, options);
+      tracker.setBackground(background);
+      std::vector<double> total, precompute, dynamics, likelihood, resample, per_particle, dynamics_per_particle;
+      tracker.start(images[0], 0.0, guess);
+      for (size_t i = 1; i < images.size(); ++i) {
+        tracker.track(images[i], i / fps);
+        const kw::tracking::TrackerTiming& t = tracker.timing();
+        total.push_back(t.total_ms);
+        precompute.push_back(t.precompute_ms);
+        dynamics.push_back(t.dynamics_cpu_ms);
+        likelihood.push_back(t.likelihood_cpu_ms);
+        resample.push_back(t.resample_ms);
+        per_particle.push_back(1e3 * t.likelihood_cpu_ms / std::max(1, t.particle_steps));
+        dynamics_per_particle.push_back(1e3 * t.dynamics_cpu_ms / std::max(1, t.particle_steps));
+      }
+      std::printf("threads=%d tracker_ms_per_frame=%.1f per_frame_precompute_ms=%.1f dynamics_ms=%.1f "
+                  "likelihood_ms=%.1f resample_ms=%.1f likelihood_us_per_particle=%.2f "
+                  "dynamics_us_per_particle=%.2f\n",
+                  threads, median(total), median(precompute), median(dynamics), median(likelihood), median(resample),
+                  median(per_particle), median(dynamics_per_particle));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_tracker: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

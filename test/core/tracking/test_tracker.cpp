@@ -1,0 +1,113 @@
+#include "kneed_walker/core/tracking/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+#include "rendered_walk.h"
+
+namespace kneed_walker::core::tracking {
+namespace {
+
+const test::RenderedWalk& scene() {
+  static const test::RenderedWalk walk(2.0, 10, 4);
+  return walk;
+}
+
+std::unique_ptr<Tracker> makeTracker(int particles, int threads) {
+  const test::RenderedWalk& s = scene();
+  TrackerOptions options;
+  options.num_particles = particles;
+  options.resample_ess_threshold = particles / 10.0;
+  options.num_threads = threads;
+  auto tracker = std::make_unique<Tracker>(
+      s.camera, s.walk.ground, gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
+      prior::loadPriorOptions(test::configFile("prior.yaml")), options);
+  tracker->setBackground(vision::BackgroundModel::learn(s.empty));
+  return tracker;
+}
+
+InitialGuess coarseStart() {
+  const test::RenderedWalk& s = scene();
+  InitialGuess guess;
+  const auto& first = s.walk.frames[0].pose;
+  guess.position_m = 0.5 * (first.joints[body::kLeftAnkle] + first.joints[body::kRightAnkle]).head<2>();
+  guess.heading_rad = 2.1;
+  guess.stance_leg = s.walk.frames[0].walker.stance_leg;
+  return guess;
+}
+
+// Runs a tracker over the rendered walk; returns the mean waist error (m) and the estimates.
+double track(Tracker& tracker, std::vector<TrackEstimate>* estimates = nullptr) {
+  const test::RenderedWalk& s = scene();
+  double error = 0;
+  for (size_t f = 0; f < s.frames.size(); ++f) {
+    const TrackEstimate e = f == 0 ? tracker.start(s.frames[0], 0.0, coarseStart()) : tracker.track(s.frames[f], 0.1 * f);
+    error += (e.pose.joints[body::kWaist] - s.walk.frames[f].pose.joints[body::kWaist]).norm();
+    if (estimates) estimates->push_back(e);
+  }
+  return error / s.frames.size();
+}
+
+// A guard that fails when tracking breaks (the accuracy itself is measured by
+// scripts/evaluate_sequences on the shipped sequences): 800 particles follow a 2 s walk.
+TEST(Tracker, FollowsASyntheticWalk) {
+  const auto tracker = makeTracker(800, 0);
+  std::vector<TrackEstimate> estimates;
+  const double error = track(*tracker, &estimates);
+  std::cout << "mean waist error " << 1000 * error << " mm over " << estimates.size() << " frames\n";
+  EXPECT_LT(error, 0.25);
+  for (const TrackEstimate& e : estimates) {
+    EXPECT_GT(e.effective_sample_size, 0.9);
+    EXPECT_FALSE(e.lost) << "frame " << e.frame;
+    EXPECT_TRUE(e.pose.joints[body::kHead].allFinite());
+  }
+  EXPECT_GT(tracker->timing().particle_steps, 0);
+}
+
+TEST(Tracker, SameSeedSameTrackOnOneOrTwoThreads) {
+  const auto one = makeTracker(200, 1), two = makeTracker(200, 2);
+  std::vector<TrackEstimate> a, b;
+  track(*one, &a);
+  track(*two, &b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t f = 0; f < a.size(); ++f)
+    for (int j = 0; j < body::kNumBodyJoints; ++j) EXPECT_EQ(a[f].pose.joints[j], b[f].pose.joints[j]) << "frame " << f;
+}
+
+TEST(Tracker, RefusesToStartWithoutABackgroundOrOnAWrongFrame) {
+  const test::RenderedWalk& s = scene();
+  TrackerOptions options;
+  options.num_particles = 50;
+  options.resample_ess_threshold = 5;
+  Tracker tracker(s.camera, s.walk.ground,
+                  gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
+                  prior::loadPriorOptions(test::configFile("prior.yaml")), options);
+  EXPECT_THROW(tracker.start(s.frames[0], 0.0, coarseStart()), std::logic_error);
+  tracker.setBackground(vision::BackgroundModel::learn(s.empty));
+  EXPECT_THROW(tracker.start(cv::Mat(10, 10, CV_8UC3), 0.0, coarseStart()), std::invalid_argument);
+  EXPECT_THROW(tracker.track(s.frames[1], 0.1), std::logic_error);
+  options.num_particles = 0;
+  EXPECT_THROW(Tracker(s.camera, s.walk.ground,
+                       gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
+                       prior::loadPriorOptions(test::configFile("prior.yaml")), options),
+               std::invalid_argument);
+}
+
+TEST(Tracker, GuessFromABoxPutsTheFeetOnTheGroundUnderIt) {
+  const test::RenderedWalk& s = scene();
+  const body::BodyPose& pose = s.walk.frames[0].pose;
+  const Eigen::Vector2d feet = *s.camera.project(0.5 * (pose.joints[body::kLeftAnkle] + pose.joints[body::kRightAnkle]));
+  const Eigen::Vector2d head = *s.camera.project(pose.joints[body::kHead]);
+  const cv::Rect2d box(cv::Point2d(feet.x() - 15, head.y() - 10), cv::Point2d(feet.x() + 15, feet.y() + 4));
+  const InitialGuess guess = guessFromBox(s.camera, s.walk.ground, box);
+  const Eigen::Vector2d truth = 0.5 * (pose.joints[body::kLeftAnkle] + pose.joints[body::kRightAnkle]).head<2>();
+  EXPECT_LT((guess.position_m - truth).norm(), 0.3);
+  EXPECT_GE(guess.heading_sd_rad, M_PI) << "a box says nothing of the heading";
+  EXPECT_THROW(guessFromBox(s.camera, s.walk.ground, cv::Rect2d(0, 0, 0, 0)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::tracking

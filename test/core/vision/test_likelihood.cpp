@@ -1,0 +1,169 @@
+#include "kneed_walker/core/vision/likelihood.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <iostream>
+
+#include "rendered_walk.h"
+
+namespace kneed_walker::core::vision {
+namespace {
+
+// A person walking across the PETS camera's view over a textured ground, rendered with sensor
+// noise, with a background model learned from noisy frames of the empty scene: a frame and the
+// one before it, the true poses, and the evidence of the frame.
+struct Scene {
+  test::RenderedWalk rendered{1.0, 10, 3};
+  const Camera& camera = rendered.camera;
+  const synthetic::SyntheticWalk& walk = rendered.walk;
+  const body::BodyShape& shape = rendered.shape;
+  BackgroundModel background = BackgroundModel::learn(rendered.empty);
+  AppearanceModel appearance;
+  LikelihoodOptions options;
+  int frame = 6;
+  const cv::Mat& previous = rendered.frames[frame - 1];
+  const cv::Mat& current = rendered.frames[frame];
+
+  Scene() {
+    // The appearance from the first frame's true outlines.
+    BodyOutlines outlines;
+    projectBodyParts(camera, walk.frames[0].pose, shape, outlines);
+    std::array<std::vector<cv::Vec3b>, kNumPartKinds> samples;
+    RowSpans spans;
+    for (int p = 0; p < body::kNumBodyParts; ++p) {
+      rasterize(outlines[p], spans);
+      for (int k = 0; k < spans.rows; ++k)
+        for (int x = spans.left[k]; x < spans.right[k]; ++x)
+          samples[partKind(static_cast<body::BodyPart>(p))].push_back(
+              rendered.frames[0].at<cv::Vec3b>(spans.first_row + k, x));
+    }
+    appearance = AppearanceModel::learn(samples);
+  }
+
+  FrameEvidence evidence(const LikelihoodOptions& o) const {
+    cv::Mat previous_grey;
+    cv::cvtColor(previous, previous_grey, cv::COLOR_BGR2GRAY);
+    FrameEvidence e;
+    e.compute(current, previous_grey, cv::Rect(300, 250, 400, 326), background, appearance, o);
+    return e;
+  }
+  BodyImageAxes axes(const body::BodyPose& pose) const {
+    BodyOutlines outlines;
+    projectBodyParts(camera, pose, shape, outlines);
+    return imageAxes(outlines);
+  }
+  double score(const FrameEvidence& e, const body::BodyPose& pose, const body::BodyPose& before,
+               const LikelihoodOptions& o) const {
+    BodyOutlines outlines;
+    projectBodyParts(camera, pose, shape, outlines);
+    const BodyImageAxes previous_axes = axes(before);
+    return evaluateLikelihood(e, outlines, &previous_axes, o);
+  }
+};
+
+const Scene& scene() {
+  static const Scene s;
+  return s;
+}
+
+body::BodyPose moved(body::BodyPose pose, const Eigen::Vector3d& by) {
+  for (auto& j : pose.joints) j += by;
+  for (auto& f : pose.foot_centres) f += by;
+  return pose;
+}
+
+body::BodyPose turned(body::BodyPose pose, double angle_rad) {
+  const Eigen::Vector3d centre = pose.joints[body::kWaist];
+  const Eigen::AngleAxisd turn(angle_rad, Eigen::Vector3d::UnitZ());
+  for (auto& j : pose.joints) j = centre + turn * (j - centre);
+  for (auto& f : pose.foot_centres) f = centre + turn * (f - centre);
+  pose.forward = turn * pose.forward;
+  pose.left = turn * pose.left;
+  return pose;
+}
+
+body::BodyPose legsSwapped(body::BodyPose pose) {
+  for (int j : {body::kLeftHip, body::kLeftKnee, body::kLeftAnkle}) {
+    // Each leg keeps its own hip: the other leg's hip-relative shape moves over.
+    const int other = j + 1;
+    std::swap(pose.joints[j], pose.joints[other]);
+  }
+  std::swap(pose.foot_centres[0], pose.foot_centres[1]);
+  const Eigen::Vector3d hip_shift = pose.joints[body::kRightHip] - pose.joints[body::kLeftHip];
+  for (int j : {body::kLeftHip, body::kLeftKnee, body::kLeftAnkle}) pose.joints[j] -= hip_shift;
+  for (int j : {body::kRightHip, body::kRightKnee, body::kRightAnkle}) pose.joints[j] += hip_shift;
+  pose.foot_centres[0] -= hip_shift;
+  pose.foot_centres[1] += hip_shift;
+  return pose;
+}
+
+TEST(Likelihood, TheTruePoseScoresHigherThanPerturbedOnes) {
+  const Scene& s = scene();
+  const FrameEvidence e = s.evidence(s.options);
+  const body::BodyPose& truth = s.walk.frames[s.frame].pose;
+  const body::BodyPose& before = s.walk.frames[s.frame - 1].pose;
+  const double best = s.score(e, truth, before, s.options);
+  const Eigen::Vector3d forward = truth.forward, left = truth.left;
+  struct Case {
+    const char* name;
+    body::BodyPose pose;
+  };
+  const Case cases[] = {{"5 cm ahead", moved(truth, 0.05 * forward)},   {"5 cm to the left", moved(truth, 0.05 * left)},
+                        {"10 cm ahead", moved(truth, 0.10 * forward)},  {"10 cm behind", moved(truth, -0.10 * forward)},
+                        {"10 cm to the right", moved(truth, -0.10 * left)}, {"20 cm ahead", moved(truth, 0.20 * forward)},
+                        {"20 cm to the left", moved(truth, 0.20 * left)}, {"turned 10 deg", turned(truth, 10 * M_PI / 180)},
+                        {"turned -10 deg", turned(truth, -10 * M_PI / 180)}, {"legs swapped", legsSwapped(truth)}};
+  for (const Case& c : cases) {
+    // The perturbed pose moved the same way from its own previous pose: only the appearance
+    // and the position of the flow differ.
+    const double other = s.score(e, c.pose, before, s.options);
+    std::cout << c.name << ": " << other << " (truth " << best << ")\n";
+    EXPECT_GT(best, other) << c.name;
+  }
+}
+
+TEST(Likelihood, TheFlowTermAlonePrefersTheTrueMotion) {
+  const Scene& s = scene();
+  LikelihoodOptions flow_only = s.options;
+  flow_only.appearance_weight = 0;
+  const FrameEvidence e = s.evidence(flow_only);
+  ASSERT_TRUE(e.hasFlow());
+  const body::BodyPose& truth = s.walk.frames[s.frame].pose;
+  const body::BodyPose& before = s.walk.frames[s.frame - 1].pose;
+  const Eigen::Vector3d step = truth.joints[body::kWaist] - before.joints[body::kWaist];
+  const double true_motion = s.score(e, truth, before, flow_only);
+  const double standing = s.score(e, truth, truth, flow_only);
+  const double twice = s.score(e, truth, moved(before, -step), flow_only);
+  const double backwards = s.score(e, truth, moved(truth, step), flow_only);
+  std::cout << "flow term: true motion " << true_motion << ", standing " << standing << ", twice as fast "
+            << twice << ", backwards " << backwards << "\n";
+  EXPECT_GT(true_motion, standing);
+  EXPECT_GT(true_motion, twice);
+  EXPECT_GT(true_motion, backwards);
+}
+
+TEST(Likelihood, HiddenPartsAndOutsidePixelsAreCounted) {
+  const Scene& s = scene();
+  const FrameEvidence e = s.evidence(s.options);
+  const body::BodyPose& truth = s.walk.frames[s.frame].pose;
+  BodyOutlines outlines;
+  projectBodyParts(s.camera, truth, s.shape, outlines);
+  PartScores scores;
+  evaluateLikelihood(e, outlines, nullptr, s.options, &scores);
+  // The torso is seen whole and scores as foreground; no flow without a previous body.
+  EXPECT_GT(scores[body::kTorsoPart].pixels, 200);
+  EXPECT_GT(scores[body::kTorsoPart].appearance, 1.0);
+  EXPECT_EQ(scores[body::kTorsoPart].flow_points, 0);
+  // The body far outside the evidence's region scores every pixel as outside.
+  BodyOutlines away;
+  projectBodyParts(s.camera, moved(truth, Eigen::Vector3d(0, 0, 0) + 8.0 * truth.left), s.shape, away);
+  PartScores outside;
+  evaluateLikelihood(e, away, nullptr, s.options, &outside);
+  EXPECT_NEAR(outside[body::kTorsoPart].appearance, s.options.outside_ratio, 1e-9);
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::vision
