@@ -126,24 +126,54 @@ kw::vision::Camera bagCamera(rosbag::Bag& bag, const std::string& info_topic, co
                            "; give --camera");
 }
 
-// The best-scoring box of `frame` in a boxes CSV (frame,x1,y1,x2,y2,score,...).
-std::optional<cv::Rect2d> boxOf(const std::string& path, int frame) {
+// The boxes of a boxes CSV (frame,x1,y1,x2,y2,score,...) by frame, with their scores.
+std::map<int, std::vector<std::pair<cv::Rect2d, double>>> readBoxes(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot read the boxes");
   std::string line;
   std::getline(in, line);
-  std::optional<cv::Rect2d> best;
-  double best_score = -1;
+  std::map<int, std::vector<std::pair<cv::Rect2d, double>>> boxes;
+  int number = 1;
   while (std::getline(in, line)) {
+    ++number;
     std::istringstream fields(line);
     std::string cell;
     std::vector<double> v;
     while (std::getline(fields, cell, ',')) v.push_back(std::atof(cell.c_str()));
-    if (v.size() < 6 || static_cast<int>(v[0]) != frame || v[5] <= best_score) continue;
-    best_score = v[5];
-    best = cv::Rect2d(cv::Point2d(v[1], v[2]), cv::Point2d(v[3], v[4]));
+    if (v.size() < 6 || !(v[3] > v[1] && v[4] > v[2]))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected frame,x1,y1,x2,y2,score,...");
+    boxes[static_cast<int>(v[0])].push_back({cv::Rect2d(cv::Point2d(v[1], v[2]), cv::Point2d(v[3], v[4])), v[5]});
   }
-  return best;
+  return boxes;
+}
+
+// The walking direction from the box nearest `box` `lookahead` frames later: the ground
+// points under the two boxes' bottoms. Empty when the person hardly moved or no box is near.
+std::optional<double> headingFromBoxes(const std::map<int, std::vector<std::pair<cv::Rect2d, double>>>& boxes,
+                                       int frame, const cv::Rect2d& box, int lookahead,
+                                       const kw::vision::Camera& camera, const kw::vision::GroundPlane& ground) {
+  const auto later = boxes.find(frame + lookahead);
+  if (later == boxes.end()) return std::nullopt;
+  const cv::Point2d centre = (box.tl() + box.br()) * 0.5;
+  const cv::Rect2d* nearest = nullptr;
+  double best = 0.5 * box.height;  // a box further than half a body away is someone else
+  for (const auto& [candidate, score] : later->second) {
+    const double d = cv::norm((candidate.tl() + candidate.br()) * 0.5 - centre);
+    if (d < best) best = d, nearest = &candidate;
+  }
+  if (!nearest) return std::nullopt;
+  const Eigen::Vector2d from = kw::tracking::guessFromBox(camera, ground, box).position_m;
+  const Eigen::Vector2d to = kw::tracking::guessFromBox(camera, ground, *nearest).position_m;
+  if ((to - from).norm() < 0.15) return std::nullopt;
+  return std::atan2(to.y() - from.y(), to.x() - from.x());
+}
+
+// The best-scoring box of `frame` in a boxes CSV (frame,x1,y1,x2,y2,score,...).
+std::optional<cv::Rect2d> bestBox(const std::map<int, std::vector<std::pair<cv::Rect2d, double>>>& boxes, int frame) {
+  const auto it = boxes.find(frame);
+  if (it == boxes.end() || it->second.empty()) return std::nullopt;
+  return std::max_element(it->second.begin(), it->second.end(),
+                          [](const auto& a, const auto& b) { return a.second < b.second; })->first;
 }
 
 double median(std::vector<double> v) {
@@ -181,7 +211,9 @@ int main(int argc, char** argv) {
   app.add_option("--info-topic", info_topic, "the bag's camera_info topic")->capture_default_str();
   app.add_option("--fps", fps, "video frame rate (default: the container's)");
   app.add_option("--init-box", init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4);
-  app.add_option("--boxes", boxes_path, "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box")
+  app.add_option("--boxes", boxes_path,
+                 "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box; the walking direction "
+                 "from the nearest box 5 frames on")
       ->check(CLI::ExistingFile);
   app.add_option("--init-position", init_position, "ground position X Y (m) instead of a box")->expected(2);
   app.add_option("--init-position-sd", guess.position_sd_m, "spread of the initial position, m")->capture_default_str();
@@ -283,25 +315,70 @@ int main(int argc, char** argv) {
     const bool tty = isatty(STDERR_FILENO);
     cv::Mat frame;
     double stamp = 0;
-    int index = -1, tracked = 0, lost = 0, resampled = 0;
+    // The rest of a track's MAP state sequence (the frames not yet written), before it ends.
+    auto flushTrack = [&] {
+      if (!filtered) {
+        std::vector<int> frames;
+        const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
+        for (size_t i = 0; i < frames.size(); ++i) writePose(frames[i], poses[i]);
+      }
+      written = -1;  // a new track numbers its frames from 0 again
+      inputs.clear();
+    };
+    int index = -1, tracked = 0, lost = 0, resampled = 0, restarts = 0, restarts_at = 0;
+    bool last_lost = false;
+    cv::Point2d last_seen_px;
+    const std::map<int, std::vector<std::pair<cv::Rect2d, double>>> boxes =
+        boxes_path.empty() ? std::map<int, std::vector<std::pair<cv::Rect2d, double>>>{} : readBoxes(boxes_path);
     while (source->next(frame, stamp)) {
       ++index;
       if (index < first_frame) continue;
       if (max_frames > 0 && tracked >= max_frames) break;
       kw::tracking::TrackEstimate estimate;
-      if (!tracker.started()) {
+      // A lost track starts again from the box nearest to where the person was last seen.
+      if (tracker.started() && last_lost && !boxes_path.empty()) {
+        std::optional<cv::Rect2d> nearest;
+        double best = 1e300;
+        for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
+          const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
+          if (d < best) best = d, nearest = box;
+        }
+        if (nearest) {
+          flushTrack();
+          const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *nearest);
+          guess.position_m = from_box.position_m;
+          const std::optional<double> heading = headingFromBoxes(boxes, index, *nearest, 5, *camera, ground);
+          guess.heading_rad = heading.value_or(0.0);
+          guess.heading_sd_rad = heading ? 0.5 : M_PI;
+          guess.stance_leg.reset();
+          estimate = tracker.start(frame, stamp, guess);
+          ++restarts;
+        }
+      }
+      if (restarts_at != restarts) {
+        restarts_at = restarts;  // started again on this frame
+      } else if (!tracker.started()) {
         if (!init_position.empty()) {
           guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
           if (!heading_given) guess.heading_sd_rad = M_PI;
         } else {
           std::optional<cv::Rect2d> box;
-          if (!init_box.empty()) box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
-          else if (!boxes_path.empty()) box = boxOf(boxes_path, index);
-          else throw std::runtime_error("give --init-box, --boxes or --init-position");
+          if (!init_box.empty()) {
+            box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
+          } else if (!boxes_path.empty()) {
+            box = bestBox(boxes, index);
+          } else {
+            throw std::runtime_error("give --init-box, --boxes or --init-position");
+          }
           if (!box) throw std::runtime_error("no box for frame " + std::to_string(index) + " in " + boxes_path);
           const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *box);
           guess.position_m = from_box.position_m;
-          if (!heading_given) guess.heading_sd_rad = M_PI;
+          if (!heading_given) {
+            // From the boxes a few frames on, if there are any; else any direction.
+            const std::optional<double> heading = headingFromBoxes(boxes, index, *box, 5, *camera, ground);
+            guess.heading_rad = heading.value_or(0.0);
+            guess.heading_sd_rad = heading ? 0.5 : M_PI;
+          }
         }
         estimate = tracker.start(frame, stamp, guess);
       } else {
@@ -315,6 +392,9 @@ int main(int argc, char** argv) {
       }
       lost += estimate.lost;
       resampled += estimate.resampled;
+      last_lost = estimate.lost;
+      if (!estimate.lost)
+        if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist])) last_seen_px = cv::Point2d(px->x(), px->y());
       inputs[estimate.frame] = {index, stamp};
       if (filtered) {
         writePose(estimate.frame, estimate.pose);
@@ -350,13 +430,9 @@ int main(int argc, char** argv) {
     }
     if (tty) std::fprintf(stderr, "\n");
     if (tracked == 0) throw std::runtime_error("no frame was tracked");
-    if (!filtered) {
-      std::vector<int> frames;
-      const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
-      for (size_t i = 0; i < frames.size(); ++i) writePose(frames[i], poses[i]);
-    }
-    std::printf("frames=%d lost_frames_reported=%d resampled_frames=%d particles=%d\n", tracked, lost, resampled,
-                options.num_particles);
+    flushTrack();
+    std::printf("frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d particles=%d\n", tracked, lost,
+                restarts, resampled, options.num_particles);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));
   } catch (const std::exception& e) {

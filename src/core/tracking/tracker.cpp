@@ -311,9 +311,10 @@ double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random)
       std::bernoulli_distribution(kGaitChangeProbability)(random))
     p.gait = neighbours[std::uniform_int_distribution<int>(0, static_cast<int>(neighbours.size()) - 1)(random)];
   body::BodyPose pose;
-  bank_[p.gait].prior->transition(p.body, dt, random, pose);
+  const bool fell = bank_[p.gait].prior->transition(p.body, dt, random, pose).fell;
   const auto t1 = Clock::now();
-  const double log_likelihood = weigh(p, frame, pose);
+  // A walker that fell is no walking person: it gets no weight (it is resampled away).
+  const double log_likelihood = fell ? -std::numeric_limits<double>::infinity() : weigh(p, frame, pose);
   const auto t2 = Clock::now();
   dynamics_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
   likelihood_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(t2 - t1).count();

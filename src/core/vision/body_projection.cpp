@@ -66,11 +66,17 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                       BodyOutlines& outlines) {
   const PartAxes axes = partAxes(pose, shape);
-  std::array<double, kOutlineSamples> cosines, sines;
-  for (int i = 0; i < kOutlineSamples; ++i) {
-    cosines[i] = std::cos(2 * M_PI * i / kOutlineSamples);
-    sines[i] = std::sin(2 * M_PI * i / kOutlineSamples);
-  }
+  // The sample directions around an ellipse, computed once (this runs per particle).
+  static const auto directions = [] {
+    std::array<std::array<double, kOutlineSamples>, 2> cs;
+    for (int i = 0; i < kOutlineSamples; ++i) {
+      cs[0][i] = std::cos(2 * M_PI * i / kOutlineSamples);
+      cs[1][i] = std::sin(2 * M_PI * i / kOutlineSamples);
+    }
+    return cs;
+  }();
+  const std::array<double, kOutlineSamples>& cosines = directions[0];
+  const std::array<double, kOutlineSamples>& sines = directions[1];
   for (int p = 0; p < body::kNumBodyParts; ++p) {
     PartOutline& outline = outlines[p];
     const body::PartShape& part = shape.parts[p];
