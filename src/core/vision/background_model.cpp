@@ -110,11 +110,11 @@ BackgroundModel BackgroundModel::learn(const std::vector<cv::Mat>& frames, const
 
 void BackgroundModel::logDensity(const cv::Mat& z, const cv::Rect& roi, cv::Mat& out) const {
   constexpr int C = kMeasurementChannels;
-  if (z.size() != size() || z.type() != CV_32FC(C))
-    throw std::invalid_argument("background log density: the measurements do not match the model");
+  if (z.size() != roi.size() || z.type() != CV_32FC(C) || (roi & cv::Rect(cv::Point(), size())) != roi)
+    throw std::invalid_argument("background log density: the measurements do not match the model's region");
   out.create(roi.size(), CV_32F);
   for (int y = 0; y < roi.height; ++y) {
-    const float* zr = z.ptr<float>(roi.y + y) + roi.x * C;
+    const float* zr = z.ptr<float>(y);
     const float* mr = mean_.ptr<float>(roi.y + y) + roi.x * C;
     const float* wr = whitening_.ptr<float>(roi.y + y) + roi.x * 15;
     const float* nr = log_normaliser_.ptr<float>(roi.y + y) + roi.x;

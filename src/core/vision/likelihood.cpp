@@ -18,7 +18,9 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   image_size_ = bgr.size();
   roi_ = roi & cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi_.empty()) roi_ = cv::Rect(0, 0, 1, 1);
-  const cv::Mat z = measurements(bgr);
+  // Measurements of the region only, with a margin so that its gradients are the whole image's.
+  const cv::Rect padded = cv::Rect(roi_.x - 2, roi_.y - 2, roi_.width + 4, roi_.height + 4) & cv::Rect(0, 0, bgr.cols, bgr.rows);
+  const cv::Mat z = measurements(bgr(padded))(cv::Rect(roi_.tl() - padded.tl(), roi_.size()));
   cv::Mat background_density;
   background.logDensity(z, roi_, background_density);
   const float limit = static_cast<float>(options.ratio_limit);
@@ -28,7 +30,7 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   }
   for (int y = 0; y < roi_.height; ++y) {
     const cv::Vec3b* pixels = bgr.ptr<cv::Vec3b>(roi_.y + y) + roi_.x;
-    const float* zr = z.ptr<float>(roi_.y + y) + roi_.x * kMeasurementChannels;
+    const float* zr = z.ptr<float>(y);
     const float* bg = background_density.ptr<float>(y);
     for (int kind = 0; kind < kNumPartKinds; ++kind) {
       float* ratio = ratio_[kind].ptr<float>(y);

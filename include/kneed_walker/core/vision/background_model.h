@@ -32,9 +32,9 @@ class BackgroundModel {
   // Throws std::invalid_argument for no frames, mixed sizes or types.
   static BackgroundModel learn(const std::vector<cv::Mat>& frames, const BackgroundOptions& options = {});
 
-  // log N(z; μ, Σ) of a frame's measurements (from measurements()) inside `roi`, into the
-  // CV_32F `log_density` of roi's size.
-  void logDensity(const cv::Mat& frame_measurements, const cv::Rect& roi, cv::Mat& log_density) const;
+  // log N(z; μ, Σ) of the measurements (from measurements()) of the image region `roi`, given
+  // roi-sized, into the CV_32F `log_density` of roi's size.
+  void logDensity(const cv::Mat& roi_measurements, const cv::Rect& roi, cv::Mat& log_density) const;
 
   cv::Size size() const { return mean_.size(); }
   bool empty() const { return mean_.empty(); }
