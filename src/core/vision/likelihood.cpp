@@ -26,7 +26,7 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   const float limit = static_cast<float>(options.ratio_limit);
   for (int kind = 0; kind < kNumPartKinds; ++kind) {
     ratio_[kind].create(roi_.size(), CV_32F);
-    prefix_[kind].create(roi_.height, roi_.width + 1, CV_64F);
+    prefix_[kind].create(roi_.height, roi_.width + 1, CV_32F);
   }
   for (int y = 0; y < roi_.height; ++y) {
     const cv::Vec3b* pixels = bgr.ptr<cv::Vec3b>(roi_.y + y) + roi_.x;
@@ -34,13 +34,15 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
     const float* bg = background_density.ptr<float>(y);
     for (int kind = 0; kind < kNumPartKinds; ++kind) {
       float* ratio = ratio_[kind].ptr<float>(y);
-      double* prefix = prefix_[kind].ptr<double>(y);
+      float* prefix = prefix_[kind].ptr<float>(y);
+      double running = 0;  // summed in double, stored in float
       prefix[0] = 0;
       for (int x = 0; x < roi_.width; ++x) {
         const float* m = zr + x * kMeasurementChannels;
         const float r = appearance.logDensity(static_cast<PartKind>(kind), pixels[x], m[3], m[4]) - bg[x];
         ratio[x] = std::clamp(r, -limit, limit);
-        prefix[x + 1] = prefix[x] + ratio[x];
+        running += ratio[x];
+        prefix[x + 1] = static_cast<float>(running);
       }
     }
   }
@@ -72,7 +74,9 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
     spans.left.resize(spans.rows);
     spans.right.resize(spans.rows);
   }
-  thread_local std::vector<double> lo, hi;
+  thread_local std::vector<double> thread_lo, thread_hi;
+  std::vector<double>& lo = thread_lo;  // one thread-local look-up per call
+  std::vector<double>& hi = thread_hi;
   if (static_cast<int>(lo.size()) < spans.rows) lo.resize(spans.rows), hi.resize(spans.rows);
   std::fill(lo.begin(), lo.begin() + spans.rows, 1e300);
   std::fill(hi.begin(), hi.begin() + spans.rows, -1e300);
@@ -128,7 +132,8 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
                           const BodyImageAxes* previous, const LikelihoodOptions& options,
                           PartScores* scores) {
   constexpr int kParts = body::kNumBodyParts;
-  thread_local std::array<RowSpans, kParts> spans;
+  thread_local std::array<RowSpans, kParts> thread_spans;
+  std::array<RowSpans, kParts>& spans = thread_spans;  // one thread-local look-up, not one per row
   // Parts near to far: a nearer part's pixels are not a farther one's.
   std::array<int, kParts> order;
   for (int p = 0; p < kParts; ++p) order[p] = p;
