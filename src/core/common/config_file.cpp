@@ -211,6 +211,13 @@ void ConfigFile::finish(const std::vector<std::string>& more, bool allow_other_k
   throwIfProblems(shared_->file_path, shared_->what, problems);
 }
 
+void throwIfInvalid(const std::string& context, const std::vector<std::string>& problems) {
+  if (problems.empty()) return;
+  std::string message = context + ":";
+  for (size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : " ") + problems[i];
+  throw std::invalid_argument(message);
+}
+
 void throwIfProblems(const std::string& path, const std::string& what,
                      const std::vector<std::string>& problems) {
   if (problems.empty()) return;

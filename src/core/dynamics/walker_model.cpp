@@ -139,7 +139,7 @@ WalkerModel scaleToPerson(const BodyProportions& p, double height_m, double mass
                                 " m or mass " + std::to_string(mass_kg) +
                                 " kg is not a person's");
   const auto problems = validate(p);
-  if (!problems.empty()) throw std::invalid_argument("scaleToPerson: " + problems.front());
+  common::throwIfInvalid("scaleToPerson", problems);
   return scaleProportions(p, p.leg_length_per_height * height_m, mass_kg, gravity);
 }
 
@@ -151,7 +151,7 @@ BodyProportions mcGeerProportions() {
 
 WalkerModel dimensionlessWalker(const BodyProportions& proportions) {
   const auto problems = validate(proportions);
-  if (!problems.empty()) throw std::invalid_argument("dimensionlessWalker: " + problems.front());
+  common::throwIfInvalid("dimensionlessWalker", problems);
   return scaleProportions(proportions, 1.0, 1.0, 1.0);
 }
 

@@ -96,7 +96,7 @@ WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait:
                          const PriorOptions& options)
     : sim_(simulator), gait_(gait), options_(options) {
   const auto problems = validate(options);
-  if (!problems.empty()) throw std::invalid_argument("PriorOptions: " + problems.front());
+  common::throwIfInvalid("PriorOptions", problems);
   if (!(gait.stride_duration > 0)) throw std::invalid_argument("WalkerPrior needs a simulated gait");
   gait_stiffness_ = {gait.controls.springs.stance_knee_stiffness,
                      gait.controls.springs.hip_stiffness, gait.controls.springs.torso_stiffness};

@@ -1,5 +1,6 @@
 #include "kneed_walker/core/synthetic/synthetic_walk.h"
 
+#include "kneed_walker/core/common/config_file.h"
 #include "kneed_walker/core/prior/body_prior.h"
 
 #include <cmath>
@@ -30,7 +31,7 @@ std::vector<std::string> validate(const SyntheticWalkOptions& o) {
 SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOptions& prior_options,
                              const SyntheticWalkOptions& o) {
   const auto problems = validate(o);
-  if (!problems.empty()) throw std::invalid_argument("synthetic walk: " + problems.front());
+  common::throwIfInvalid("synthetic walk", problems);
 
   prior::requirePriorTable(table, prior_options);
   SyntheticWalk walk;

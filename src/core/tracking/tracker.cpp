@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kneed_walker/core/common/config_file.h"
 #include "kneed_walker/core/dynamics/walker_model.h"
 
 namespace kneed_walker::core::tracking {
@@ -50,12 +51,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
                  const gait::GaitTable& table, const prior::PriorOptions& prior_options,
                  const TrackerOptions& options, const vision::LikelihoodOptions& likelihood)
     : camera_(camera), ground_(ground), options_(options), likelihood_(likelihood) {
-  const auto problems = validate(options);
-  if (!problems.empty()) {
-    std::string message = "tracker options:";
-    for (const auto& p : problems) message += " " + p + ";";
-    throw std::invalid_argument(message);
-  }
+  common::throwIfInvalid("tracker options", validate(options));
   prior::requirePriorTable(table, prior_options);
   // The gaits the particles walk around: the table's feasible gaits at the slope nearest the
   // ground's, scaled to the person by Froude similarity.

@@ -82,6 +82,10 @@ class ConfigFile : public ConfigNode {
   cv::FileStorage storage_;
 };
 
+// Throws std::invalid_argument "<context>: <problem>; <problem>; ..." naming every problem, if
+// any (for options checked by a validate() function).
+void throwIfInvalid(const std::string& context, const std::vector<std::string>& problems);
+
 // Throws std::invalid_argument "<path>: invalid <what>:" with one problem per line, if any.
 void throwIfProblems(const std::string& path, const std::string& what,
                      const std::vector<std::string>& problems);
