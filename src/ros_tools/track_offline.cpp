@@ -253,6 +253,10 @@ int main(int argc, char** argv) {
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
+  if (init_box.empty() && boxes_path.empty() && init_position.empty()) {
+    std::fprintf(stderr, "track_offline: give --init-box, --boxes or --init-position (where the person starts)\n");
+    return 1;
+  }
   if (!init_stance.empty()) guess.stance_leg = init_stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
 
   try {
