@@ -106,8 +106,6 @@ void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines
   vision::projectBodyParts(camera_, pose, bank_.front().prior->shape(), outlines);
 }
 
-const vision::FrameEvidence& Tracker::evidence() const { return *evidence_.back(); }
-
 double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& pose_on_slope) const {
   body::BodyPose pose = pose_on_slope;
   const double lift = ground_.height(particle.body.placement.value.ground_origin_m);

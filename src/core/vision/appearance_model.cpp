@@ -69,11 +69,6 @@ PartKind partKind(body::BodyPart part) {
   }
 }
 
-const char* partKindName(PartKind kind) {
-  static const char* const kNames[kNumPartKinds] = {"foot", "shank", "thigh", "torso", "head"};
-  return kNames[kind];
-}
-
 AppearanceModel AppearanceModel::learn(const std::array<std::vector<cv::Vec3b>, kNumPartKinds>& samples,
                                        const AppearanceOptions& options) {
   std::vector<cv::Vec3b> all;

@@ -15,7 +15,6 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("the likelihood needs BGR 8-bit frames");
   if (bgr.size() != background.size())
     throw std::invalid_argument("the frame's size differs from the background model's");
-  image_size_ = bgr.size();
   roi_ = roi & cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi_.empty()) roi_ = cv::Rect(0, 0, 1, 1);
   // Measurements of the region only, with a margin so that its gradients are the whole image's.
@@ -24,24 +23,19 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   cv::Mat background_density;
   background.logDensity(z, roi_, background_density);
   const float limit = static_cast<float>(options.ratio_limit);
-  for (int kind = 0; kind < kNumPartKinds; ++kind) {
-    ratio_[kind].create(roi_.size(), CV_32F);
-    prefix_[kind].create(roi_.height, roi_.width + 1, CV_32F);
-  }
+  for (int kind = 0; kind < kNumPartKinds; ++kind) prefix_[kind].create(roi_.height, roi_.width + 1, CV_32F);
   for (int y = 0; y < roi_.height; ++y) {
     const cv::Vec3b* pixels = bgr.ptr<cv::Vec3b>(roi_.y + y) + roi_.x;
     const float* zr = z.ptr<float>(y);
     const float* bg = background_density.ptr<float>(y);
     for (int kind = 0; kind < kNumPartKinds; ++kind) {
-      float* ratio = ratio_[kind].ptr<float>(y);
       float* prefix = prefix_[kind].ptr<float>(y);
       double running = 0;  // summed in double, stored in float
       prefix[0] = 0;
       for (int x = 0; x < roi_.width; ++x) {
         const float* m = zr + x * kMeasurementChannels;
         const float r = appearance.logDensity(static_cast<PartKind>(kind), pixels[x], m[3], m[4]) - bg[x];
-        ratio[x] = std::clamp(r, -limit, limit);
-        running += ratio[x];
+        running += std::clamp(r, -limit, limit);
         prefix[x + 1] = static_cast<float>(running);
       }
     }

@@ -105,9 +105,7 @@ class Tracker {
   // The MAP state sequence over the buffered frames (oldest first) as body poses, and their frames.
   std::vector<body::BodyPose> mapPoses(std::vector<int>* frames) const;
   const TrackerTiming& timing() const { return timing_; }
-  const vision::FrameEvidence& evidence() const;  // of the newest frame
   int gaitCount() const { return static_cast<int>(bank_.size()); }
-  double gaitSpeedKmh(int gait) const { return bank_[gait].speed_kmh; }
   // The pose of a particle (world, metres).
   body::BodyPose pose(const TrackerParticle& particle) const;
   // Its parts' image outlines.

@@ -19,7 +19,6 @@ namespace kneed_walker::core::vision {
 
 enum PartKind : int { kFootKind = 0, kShankKind, kThighKind, kTorsoKind, kHeadKind, kNumPartKinds };
 PartKind partKind(body::BodyPart part);
-const char* partKindName(PartKind kind);
 
 struct AppearanceOptions {
   int components = 3;          // mixture components per part kind
@@ -41,8 +40,6 @@ class AppearanceModel {
   float logDensity(PartKind kind, const cv::Vec3b& bgr, float gx, float gy) const {
     return table_[kind][index(bgr)] + gradient_scale_ * (gx * gx + gy * gy) + gradient_log_normaliser_;
   }
-  // The colour part alone, log p(colour | kind).
-  float colourLogDensity(PartKind kind, const cv::Vec3b& bgr) const { return table_[kind][index(bgr)]; }
   bool empty() const { return table_[0].empty(); }
 
  private:

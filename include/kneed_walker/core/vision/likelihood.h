@@ -5,7 +5,7 @@
 // points. Parts occlude each other: a part's pixels covered by a nearer part are not its own.
 //
 // FrameEvidence holds everything shared by all particles of a frame, computed once: per part
-// kind a map of clamped per-pixel log ratios with row-wise prefix sums, and the flow grid. A
+// kind the row-wise prefix sums of the clamped per-pixel log ratios, and the flow grid. A
 // particle then costs two look-ups per row its outline covers (cost grows with the rows, not
 // with the area) and one Student-t per visible flow grid point; evaluate() allocates nothing.
 #pragma once
@@ -50,7 +50,6 @@ class FrameEvidence {
                const BackgroundModel& background, const AppearanceModel& appearance,
                const LikelihoodOptions& options);
   const cv::Rect& roi() const { return roi_; }
-  cv::Size imageSize() const { return image_size_; }
   bool hasFlow() const { return !flow_.empty(); }
   const FlowField& flow() const { return flow_; }
   // Σ of a kind's log ratios over columns [x0, x1) of image row y (inside the roi).
@@ -58,13 +57,9 @@ class FrameEvidence {
     const float* p = prefix_[kind].ptr<float>(y - roi_.y);
     return p[x1 - roi_.x] - p[x0 - roi_.x];
   }
-  // The clamped per-pixel log ratio map of a kind (roi-sized, CV_32F), for pictures and tests.
-  const cv::Mat& ratioMap(PartKind kind) const { return ratio_[kind]; }
 
  private:
   cv::Rect roi_;
-  cv::Size image_size_;
-  std::array<cv::Mat, kNumPartKinds> ratio_;   // CV_32F
   // CV_32F, roi.height × (roi.width + 1): single precision halves the memory the particles read
   // at random (the hot spot); a row's sums stay within 1e-3 of double's.
   std::array<cv::Mat, kNumPartKinds> prefix_;
