@@ -13,7 +13,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
-#include <ros/package.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -36,8 +35,13 @@
 #include "kneed_walker/core/tracking/tracker.h"
 #include "kneed_walker/core/vision/overlay.h"
 #include "kneed_walker/ros/conversions.h"
+#include "median.h"
+#include "options.h"
+#include "package_files.h"
 
 namespace kw = kneed_walker::core;
+using kneed_walker::tools::FiniteRange;
+using kneed_walker::tools::median;
 
 namespace {
 
@@ -78,7 +82,11 @@ class VideoSource : public FrameSource {
 class BagSource : public FrameSource {
  public:
   BagSource(const std::string& path, const std::string& topic) : topic_(topic) {
-    bag_.open(path, rosbag::bagmode::Read);
+    try {
+      bag_.open(path, rosbag::bagmode::Read);
+    } catch (const rosbag::BagException& e) {
+      throw std::runtime_error("--bag " + path + ": not a readable bag: " + e.what());
+    }
     rewind();
     count_ = static_cast<int>(view_->size());
     if (count_ == 0) throw std::runtime_error(path + ": no messages on " + topic);
@@ -176,12 +184,6 @@ std::optional<cv::Rect2d> bestBox(const std::map<int, std::vector<std::pair<cv::
                           [](const auto& a, const auto& b) { return a.second < b.second; })->first;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -189,9 +191,9 @@ int main(int argc, char** argv) {
   std::string bag_path, video_path, camera_path, image_topic = "/camera/image_raw",
               info_topic = "/camera/camera_info", world_frame = "world", out_csv, overlay_path, boxes_path,
               background_path;
-  const std::string share = ros::package::getPath("kneed_walker");
-  std::string table_path = share + "/config/prior_gait_table.yaml", prior_path = share + "/config/prior.yaml",
-              walker_model = share + "/config/walker_model.yaml";
+  std::string table_path = kneed_walker::tools::packageFile("config/prior_gait_table.yaml");
+  std::string prior_path = kneed_walker::tools::packageFile("config/prior.yaml");
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   double camera_unit_m = 0.001, fps = 0;
   std::vector<double> init_box, init_position;
   kw::tracking::InitialGuess guess;
@@ -206,46 +208,58 @@ int main(int argc, char** argv) {
   input->require_option(1);
   app.add_option("--camera", camera_path, "calibration (OpenCV YAML; may hold the ground plane); a bag's camera_info + /tf_static otherwise")
       ->check(CLI::ExistingFile);
-  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str();
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str()
+      ->check(FiniteRange(1e-6, 1e3));
   app.add_option("--image-topic", image_topic, "the bag's image topic")->capture_default_str();
   app.add_option("--info-topic", info_topic, "the bag's camera_info topic")->capture_default_str();
-  app.add_option("--fps", fps, "video frame rate (default: the container's)");
-  app.add_option("--init-box", init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4);
+  app.add_option("--fps", fps, "video frame rate (default: the container's)")->check(FiniteRange(0.1, 1000));
+  app.add_option("--init-box", init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4)
+      ->check(FiniteRange(-1e5, 1e5));
   app.add_option("--boxes", boxes_path,
                  "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box; the walking direction "
                  "from the nearest box 5 frames on")
       ->check(CLI::ExistingFile);
-  app.add_option("--init-position", init_position, "ground position X Y (m) instead of a box")->expected(2);
-  app.add_option("--init-position-sd", guess.position_sd_m, "spread of the initial position, m")->capture_default_str();
+  app.add_option("--init-position", init_position, "ground position X Y (m) instead of a box")->expected(2)
+      ->check(FiniteRange(-1e5, 1e5));
+  app.add_option("--init-position-sd", guess.position_sd_m, "spread of the initial position, m")->capture_default_str()
+      ->check(FiniteRange(0.0, 10.0));
   app.add_option("--init-heading", guess.heading_rad, "walking direction, rad from +X towards +Y (default: unknown)")
-      ->each([&](const std::string&) { heading_given = true; });
-  app.add_option("--init-heading-sd", guess.heading_sd_rad, "spread of the heading, rad")->capture_default_str();
+      ->check(FiniteRange(-100, 100))->each([&](const std::string&) { heading_given = true; });
+  app.add_option("--init-heading-sd", guess.heading_sd_rad, "spread of the heading, rad (≥ π: any direction)")->capture_default_str()
+      ->check(FiniteRange(0.0, 10.0));
   std::string init_stance;
   app.add_option("--init-stance", init_stance, "the leg on the ground in the first frame: left or right (default: unknown)")
       ->check(CLI::IsMember({"left", "right"}));
-  app.add_option("--min-speed", guess.min_speed_kmh, "slowest initial walking speed, km/h")->capture_default_str();
-  app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str();
-  app.add_option("--particles", options.num_particles, "particles")->capture_default_str();
-  app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)");
+  app.add_option("--min-speed", guess.min_speed_kmh, "slowest initial walking speed, km/h")->capture_default_str()
+      ->check(FiniteRange(0.0, 20.0));
+  app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str()
+      ->check(FiniteRange(0.0, 20.0));
+  app.add_option("--particles", options.num_particles, "particles")->capture_default_str()->check(CLI::Range(1, 1000000));
+  app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)")
+      ->check(FiniteRange(1e-9, 1e6));
   app.add_option("--resample-lag", options.resample_lag_frames, "Δs: resample from this many frames back")
-      ->capture_default_str();
+      ->capture_default_str()->check(CLI::Range(0, 30));
   app.add_option("--resample-mixing", options.resample_mixing, "γ: weight of the newest weights in the proposal")
-      ->capture_default_str();
-  app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str();
+      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
+  app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str()->check(CLI::Range(0, 256));
   app.add_option("--seed", options.seed, "random seed")->capture_default_str();
-  app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str();
-  app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str();
-  app.add_option("--frames", max_frames, "track at most this many frames (0: all)");
+  app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str()
+      ->check(FiniteRange(1.0, 2.3));
+  app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--frames", max_frames, "track at most this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
-      ->capture_default_str();
+      ->capture_default_str()->check(CLI::Range(1, 1000));
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
   app.add_flag("--filtered", filtered,
                "write each frame's best particle as it comes, instead of the MAP state sequence (the best "
                "particle's ancestry, each frame written Δs frames later)");
   app.add_flag("--no-flow", no_flow, "leave the optical flow out of the likelihood");
-  app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str();
-  app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str();
-  app.add_option("--flow-min-sd", likelihood.flow.min_sd_px, "floor of the flow's SD, px")->capture_default_str();
+  app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str()
+      ->check(FiniteRange(0.0, 100.0));
+  app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str()
+      ->check(FiniteRange(0.0, 100.0));
+  app.add_option("--flow-min-sd", likelihood.flow.min_sd_px, "floor of the flow's SD, px")->capture_default_str()
+      ->check(FiniteRange(0.01, 100.0));
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
@@ -257,8 +271,27 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "track_offline: give --init-box, --boxes or --init-position (where the person starts)\n");
     return 1;
   }
+  if (guess.min_speed_kmh > guess.max_speed_kmh) {
+    std::fprintf(stderr, "track_offline: --min-speed %g exceeds --max-speed %g\n", guess.min_speed_kmh,
+                 guess.max_speed_kmh);
+    return 1;
+  }
   if (!init_stance.empty()) guess.stance_leg = init_stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
 
+  // The outputs are opened first (an unwritable one fails at once) and removed when the run
+  // fails (no partial output is left behind).
+  std::ofstream csv(out_csv);
+  if (!csv) {
+    std::fprintf(stderr, "track_offline: --out-csv %s: cannot write\n", out_csv.c_str());
+    return 1;
+  }
+  cv::VideoWriter overlay;
+  auto removeOutputs = [&] {
+    csv.close();
+    overlay.release();
+    std::remove(out_csv.c_str());
+    if (!overlay_path.empty()) std::remove(overlay_path.c_str());
+  };
   try {
     std::unique_ptr<FrameSource> source;
     std::optional<kw::vision::Camera> camera;
@@ -271,6 +304,11 @@ int main(int argc, char** argv) {
       source = std::make_unique<VideoSource>(video_path, fps);
     }
     if (!camera_path.empty()) camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    if (!overlay_path.empty()) {
+      overlay.open(overlay_path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps > 0 ? fps : 10,
+                   cv::Size(camera->width(), camera->height()));
+      if (!overlay.isOpened()) throw std::runtime_error("--overlay " + overlay_path + ": cannot write the video");
+    }
     const kw::vision::GroundPlane ground =
         camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(camera_path);
     options.ground_slope_rad = ground.slope_rad;
@@ -283,6 +321,7 @@ int main(int argc, char** argv) {
     const int total = source->count();
     if (!background_path.empty()) {
       cv::Mat image = cv::imread(background_path);
+      if (image.empty()) throw std::runtime_error("--background " + background_path + ": not a readable image");
       tracker.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
     } else {
       std::vector<cv::Mat> samples;
@@ -299,8 +338,6 @@ int main(int argc, char** argv) {
       source->rewind();
     }
 
-    std::ofstream csv(out_csv);
-    if (!csv) throw std::runtime_error(out_csv + ": cannot write");
     csv << "frame,stamp,joint,x,y,z\n" << std::fixed;
     std::map<int, std::pair<int, double>> inputs;  // tracker frame -> input frame index, stamp
     int written = -1;                               // the last tracker frame written
@@ -314,7 +351,6 @@ int main(int argc, char** argv) {
             << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
       }
     };
-    cv::VideoWriter overlay;
     std::vector<double> total_ms, precompute_ms, particles_ms;
     const bool tty = isatty(STDERR_FILENO);
     cv::Mat frame;
@@ -329,7 +365,7 @@ int main(int argc, char** argv) {
       written = -1;  // a new track numbers its frames from 0 again
       inputs.clear();
     };
-    int index = -1, tracked = 0, lost = 0, resampled = 0, restarts = 0, restarts_at = 0;
+    int index = -1, tracked = 0, lost = 0, resampled = 0, restarts = 0, restarts_at = 0, skipped = 0;
     bool last_lost = false;
     cv::Point2d last_seen_px;
     const std::map<int, std::vector<std::pair<cv::Rect2d, double>>> boxes =
@@ -339,54 +375,60 @@ int main(int argc, char** argv) {
       if (index < first_frame) continue;
       if (max_frames > 0 && tracked >= max_frames) break;
       kw::tracking::TrackEstimate estimate;
-      // A lost track starts again from the box nearest to where the person was last seen.
-      if (tracker.started() && last_lost && !boxes_path.empty()) {
-        std::optional<cv::Rect2d> nearest;
-        double best = 1e300;
-        for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
-          const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
-          if (d < best) best = d, nearest = box;
-        }
-        if (nearest) {
-          flushTrack();
-          const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *nearest);
-          guess.position_m = from_box.position_m;
-          const std::optional<double> heading = headingFromBoxes(boxes, index, *nearest, 5, *camera, ground);
-          guess.heading_rad = heading.value_or(0.0);
-          guess.heading_sd_rad = heading ? 0.5 : M_PI;
-          guess.stance_leg.reset();
-          estimate = tracker.start(frame, stamp, guess);
-          ++restarts;
-        }
-      }
-      if (restarts_at != restarts) {
-        restarts_at = restarts;  // started again on this frame
-      } else if (!tracker.started()) {
-        if (!init_position.empty()) {
-          guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
-          if (!heading_given) guess.heading_sd_rad = M_PI;
-        } else {
-          std::optional<cv::Rect2d> box;
-          if (!init_box.empty()) {
-            box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
-          } else if (!boxes_path.empty()) {
-            box = bestBox(boxes, index);
-          } else {
-            throw std::runtime_error("give --init-box, --boxes or --init-position");
+      try {
+        // A lost track starts again from the box nearest to where the person was last seen.
+        if (tracker.started() && last_lost && !boxes_path.empty()) {
+          std::optional<cv::Rect2d> nearest;
+          double best = 1e300;
+          for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
+            const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
+            if (d < best) best = d, nearest = box;
           }
-          if (!box) throw std::runtime_error("no box for frame " + std::to_string(index) + " in " + boxes_path);
-          const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *box);
-          guess.position_m = from_box.position_m;
-          if (!heading_given) {
-            // From the boxes a few frames on, if there are any; else any direction.
-            const std::optional<double> heading = headingFromBoxes(boxes, index, *box, 5, *camera, ground);
+          if (nearest) {
+            flushTrack();
+            const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *nearest);
+            guess.position_m = from_box.position_m;
+            const std::optional<double> heading = headingFromBoxes(boxes, index, *nearest, 5, *camera, ground);
             guess.heading_rad = heading.value_or(0.0);
             guess.heading_sd_rad = heading ? 0.5 : M_PI;
+            guess.stance_leg.reset();
+            estimate = tracker.start(frame, stamp, guess);
+            ++restarts;
           }
         }
-        estimate = tracker.start(frame, stamp, guess);
-      } else {
-        estimate = tracker.track(frame, stamp);
+        if (restarts_at != restarts) {
+          restarts_at = restarts;  // started again on this frame
+        } else if (!tracker.started()) {
+          if (!init_position.empty()) {
+            guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
+            if (!heading_given) guess.heading_sd_rad = M_PI;
+          } else {
+            std::optional<cv::Rect2d> box;
+            if (!init_box.empty()) {
+              box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
+            } else if (!boxes_path.empty()) {
+              box = bestBox(boxes, index);
+            } else {
+              throw std::runtime_error("give --init-box, --boxes or --init-position");
+            }
+            if (!box) throw std::runtime_error("no box for frame " + std::to_string(index) + " in " + boxes_path);
+            const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *box);
+            guess.position_m = from_box.position_m;
+            if (!heading_given) {
+              // From the boxes a few frames on, if there are any; else any direction.
+              const std::optional<double> heading = headingFromBoxes(boxes, index, *box, 5, *camera, ground);
+              guess.heading_rad = heading.value_or(0.0);
+              guess.heading_sd_rad = heading ? 0.5 : M_PI;
+            }
+          }
+          estimate = tracker.start(frame, stamp, guess);
+        } else {
+          estimate = tracker.track(frame, stamp);
+        }
+      } catch (const std::invalid_argument& e) {
+        // A frame the tracker cannot use (another size, no ground under the box): skipped and counted.
+        if (skipped++ == 0) std::fprintf(stderr, "\ntrack_offline: frame %d skipped: %s\n", index, e.what());
+        continue;
       }
       const kw::tracking::TrackerTiming& timing = tracker.timing();
       if (tracked > 0) {
@@ -409,10 +451,6 @@ int main(int argc, char** argv) {
         if (static_cast<int>(frames.size()) == options.resample_lag_frames + 1) writePose(frames.front(), poses.front());
       }
       if (!overlay_path.empty()) {
-        if (!overlay.isOpened()) {
-          overlay.open(overlay_path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, frame.size());
-          if (!overlay.isOpened()) throw std::runtime_error(overlay_path + ": cannot write the video");
-        }
         std::vector<Eigen::Vector2f> cloud;
         for (const auto& p : tracker.particles())
           if (const auto px = camera->project(p.joints[kw::body::kWaist].cast<double>())) cloud.push_back(px->cast<float>());
@@ -435,11 +473,12 @@ int main(int argc, char** argv) {
     if (tty) std::fprintf(stderr, "\n");
     if (tracked == 0) throw std::runtime_error("no frame was tracked");
     flushTrack();
-    std::printf("frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d particles=%d\n", tracked, lost,
-                restarts, resampled, options.num_particles);
+    std::printf("frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d particles=%d\n",
+                tracked, skipped, lost, restarts, resampled, options.num_particles);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));
   } catch (const std::exception& e) {
+    removeOutputs();
     std::fprintf(stderr, "track_offline: %s\n", e.what());
     return 1;
   }

@@ -20,9 +20,11 @@
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/tracking/tracker.h"
 #include "median.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
+using kneed_walker::tools::FiniteRange;
 using kneed_walker::tools::median;
 
 int main(int argc, char** argv) {
@@ -35,10 +37,10 @@ int main(int argc, char** argv) {
   int particles = 5000, frames = 40;
   app.add_option("--camera", camera_path, "calibration (OpenCV YAML)")->required()->check(CLI::ExistingFile);
   app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteRange(1e-6, 1e3));
   app.add_option("--particles", particles, "particles")->capture_default_str()->check(CLI::Range(10, 1000000));
   app.add_option("--frames", frames, "frames tracked per run")->capture_default_str()->check(CLI::Range(3, 10000));
-  app.add_option("--fps", fps, "frame rate of the walk")->capture_default_str()->check(CLI::Range(1.0, 240.0));
+  app.add_option("--fps", fps, "frame rate of the walk")->capture_default_str()->check(FiniteRange(1.0, 240.0));
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();

@@ -26,8 +26,10 @@
 
 #include "kneed_walker/core/body/body_model.h"
 #include "kneed_walker/core/vision/ground_plane.h"
+#include "options.h"
 
 namespace kw = kneed_walker::core;
+using kneed_walker::tools::FiniteRange;
 
 namespace {
 
@@ -71,11 +73,11 @@ int main(int argc, char** argv) {
   app.add_option("--ground", ground_path, "calibration file with the ground plane (default: level Z = 0)")
       ->check(CLI::ExistingFile);
   app.add_option("--lost-mm", lost_mm, "a frame whose mean joint error exceeds this is lost")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteRange(1e-3, 1e6));
   app.add_option("--contact-mm", contact_mm, "an ankle within this of its lowest height is on the ground")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(FiniteRange(1e-3, 1e3));
   app.add_option("--ankle-height", ankle_height_m, "ankle above the sole, m (0.039 x height)")->capture_default_str()
-      ->check(CLI::Range(0.0, 0.3));
+      ->check(FiniteRange(0.0, 0.3));
   CLI11_PARSE(app, argc, argv);
   try {
     const auto truth = readPoses(truth_path), estimate = readPoses(estimate_path);

@@ -24,8 +24,6 @@ void ConfigNode::problem(const std::string& key, const std::string& message) {
   shared_->problems.push_back(name(key) + " " + message);
 }
 
-bool ConfigNode::has(const std::string& key) const { return !node_.empty() && !node_[key].empty(); }
-
 cv::FileNode ConfigNode::find(const std::string& key, Need need) {
   if (node_.empty()) return cv::FileNode();
   if (!shared_->read.insert(name(key)).second) {

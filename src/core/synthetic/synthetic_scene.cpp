@@ -8,20 +8,16 @@
 #include <stdexcept>
 #include <vector>
 
+#include "kneed_walker/core/common/random.h"
+
 namespace kneed_walker::core::synthetic {
 namespace {
 
-// SplitMix64: a fixed, platform-independent hash for the procedural texture.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 // A value in [0, 1) for a grid cell.
 double cellNoise(std::int64_t i, std::int64_t j, std::uint64_t seed) {
-  const std::uint64_t h = mix(mix(mix(seed) ^ static_cast<std::uint64_t>(i)) ^ static_cast<std::uint64_t>(j));
+  using common::splitMix64;
+  const std::uint64_t h =
+      splitMix64(splitMix64(splitMix64(seed) ^ static_cast<std::uint64_t>(i)) ^ static_cast<std::uint64_t>(j));
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 #include "kneed_walker/core/common/config_file.h"
@@ -94,22 +93,25 @@ void Tracker::setBackground(vision::BackgroundModel background) {
   background_ = std::move(background);
 }
 
-body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
-  body::BodyPose pose = bank_[particle.gait].prior->pose(particle.body);
+body::BodyPose Tracker::onGround(body::BodyPose pose, const TrackerParticle& particle) const {
+  // The body prior places the walker's slope frame at height 0 under its origin; the ground
+  // there is the plane's.
   const double lift = ground_.height(particle.body.placement.value.ground_origin_m);
   for (auto& joint : pose.joints) joint.z() += lift;
   for (auto& foot : pose.foot_centres) foot.z() += lift;
   return pose;
 }
 
+body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
+  return onGround(bank_[particle.gait].prior->pose(particle.body), particle);
+}
+
 void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const {
   vision::projectBodyParts(camera_, pose, bank_.front().prior->shape(), outlines);
 }
 
-double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& pose_on_slope) const {
-  body::BodyPose pose = pose_on_slope;
-  const double lift = ground_.height(particle.body.placement.value.ground_origin_m);
-  for (auto& joint : pose.joints) joint.z() += lift;
+double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const {
+  const body::BodyPose pose = onGround(prior_pose, particle);
   thread_local vision::BodyOutlines outlines;
   project(pose, outlines);
   const vision::FrameEvidence* evidence = nullptr;

@@ -44,7 +44,6 @@ class ConfigNode {
   }
   bool read(const std::string& key, cv::Mat& matrix, Need need = Need::kOptional);
 
-  bool has(const std::string& key) const;
   // A nested map (its keys are reported as "key.field"); an empty node when absent or wrong.
   ConfigNode map(const std::string& key, Need need = Need::kOptional);
   // A sequence of maps (reported as "key[i].field").
@@ -54,7 +53,6 @@ class ConfigNode {
   void problem(const std::string& key, const std::string& message);
   // The full name of a key of this node, as problems report it.
   std::string name(const std::string& key) const;
-  bool valid() const { return !node_.empty() || path_.empty(); }
 
  protected:
   struct Shared;

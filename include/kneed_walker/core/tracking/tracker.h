@@ -117,7 +117,10 @@ class Tracker {
     double speed_kmh = 0, step_length_m = 0;  // the person's, by Froude scaling
     std::vector<int> neighbours;  // gaits one grid step away in speed and/or step length
   };
-  double weigh(TrackerParticle& particle, int frame, const body::BodyPose& pose) const;
+  // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround).
+  double weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const;
+  // A body prior's pose raised onto the ground plane.
+  body::BodyPose onGround(body::BodyPose pose, const TrackerParticle& particle) const;
   // Propagates one particle into `frame` and weighs it, adding the times to the counters.
   double propagate(TrackerParticle& particle, int frame, common::Random& random);
   TrackEstimate estimate(const FilterStepReport& report) const;
