@@ -36,8 +36,8 @@ struct LikelihoodOptions {
   // Weights of each part's appearance and flow averages. The paper sums the averages with
   // weight 1; measured on the four synthetic sequences (2000 particles, 3 seeds; README
   // "The tracker"), weight 1 collapses N_eff to a few particles every frame and loses the person
-  // in most runs (mean joint error 228 mm on average), 0.5 and 0.15 in some (101 and 99 mm),
-  // 0.3 least (83 mm).
+  // in most runs (mean joint error 232 mm on average), 0.5 and 0.15 in some (98 and 99 mm),
+  // 0.3 least (87 mm).
   double appearance_weight = 0.3;
   double flow_weight = 0.3;
 };
