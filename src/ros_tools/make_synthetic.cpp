@@ -33,6 +33,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "options.h"
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/vision/background.h"
 #include "kneed_walker/ros/conversions.h"
@@ -200,7 +201,7 @@ int main(int argc, char** argv) {
   app.add_option("--camera", s.camera_path, "calibration (OpenCV YAML: camera_matrix, distortion_coefficients, R, t)")
       ->required()->check(CLI::ExistingFile);
   app.add_option("--camera-unit", s.camera_unit_m, "metres per length unit of the calibration's t")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(kneed_walker::tools::FiniteRange(1e-6, 1e3));
   app.add_option("--background", s.background,
                  "'textured' (a paved ground plane), an image, or a video whose median frame is the empty scene")->capture_default_str();
   app.add_option("--background-samples", s.background_samples, "frames of the video in the median")->capture_default_str()
@@ -209,23 +210,25 @@ int main(int argc, char** argv) {
   app.add_option("--prior", s.prior, "prior parameters")->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--walker-model", s.walker_model, "body proportions; the table must be made for them")
       ->capture_default_str()->check(CLI::ExistingFile);
-  app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str();
-  app.add_option("--step", w.step_length_m, "step length, m")->capture_default_str();
-  app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill")->capture_default_str();
+  app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--step", w.step_length_m, "step length, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
+  app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
   app.add_option("--heading", w.heading_rad,
                  "walking direction in the world XY plane, rad from +X towards +Y; default: across the view, "
-                 "towards the image's left");
+                 "towards the image's left")->check(kneed_walker::tools::FiniteRange(-10, 10));
   app.add_option("--start-pixel", s.start_pixel, "image point (x y) where the walk starts on the ground")
       ->expected(2);
-  app.add_option("--duration", w.duration_s, "length, s")->capture_default_str();
-  app.add_option("--fps", w.fps, "frame rate, frames/s")->capture_default_str();
-  app.add_option("--height", w.person_height_m, "the person's height, m")->capture_default_str();
-  app.add_option("--seed", w.seed, "random seed: the same seed gives the same files")->capture_default_str();
+  app.add_option("--duration", w.duration_s, "length, s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.01, 3600));
+  app.add_option("--fps", w.fps, "frame rate, frames/s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(1, 1000));
+  app.add_option("--height", w.person_height_m, "the person's height, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.5, 2.5));
+  app.add_option("--seed", w.seed, "random seed: the same seed gives the same files")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(0, 1.8e19));
   app.add_option("--noise", s.noise_sigma, "sensor noise, grey levels (standard deviation)")->capture_default_str()
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(kneed_walker::tools::FiniteRange(0.0, 100.0));
   app.add_flag("--occluder", s.occluder, "a board crosses in front of the person mid-sequence");
   app.add_option("--start-stamp", s.start_stamp_s, "stamp of the first frame, s since the epoch")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(kneed_walker::tools::FiniteRange(1e-3, 4e9));
   CLI11_PARSE(app, argc, argv);
   s.heading_given = app.count("--heading") > 0;
   try {

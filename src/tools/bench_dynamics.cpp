@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "median.h"
+#include "options.h"
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/optimizer/periodic_gait.h"
 
@@ -43,16 +44,16 @@ std::vector<kw::dynamics::WalkerState> gaitBatch(const kw::dynamics::WalkerSimul
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Times the Kneed Walker dynamics on a batch of particles."};
   int particles = 5000, frames = 30, repeats = 7;
   double fps = 30, max_step = kw::dynamics::SimulationOptions{}.max_step;
   unsigned seed = 1;
   app.add_option("--particles", particles, "walkers in the batch")->check(CLI::Range(1, 1000000));
   app.add_option("--frames", frames, "frames advanced per repeat")->check(CLI::Range(1, 10000));
-  app.add_option("--fps", fps, "frame rate: each frame advances 1/fps s")->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--fps", fps, "frame rate: each frame advances 1/fps s")->check(kneed_walker::tools::FiniteRange(1.0, 1000.0));
   app.add_option("--repeats", repeats, "timed repeats; the median is reported")->check(CLI::Range(1, 1000));
-  app.add_option("--max-step", max_step, "RK4 step, natural time units √(L/g)")->check(CLI::Range(1e-4, 0.2));
+  app.add_option("--max-step", max_step, "RK4 step, natural time units √(L/g)")->check(kneed_walker::tools::FiniteRange(1e-4, 0.2));
   app.add_option("--seed", seed, "random seed of the batch");
   CLI11_PARSE(app, argc, argv);
 
@@ -108,4 +109,13 @@ int main(int argc, char** argv) {
               single * particles / 1e3, all * particles / 1e3, cores, single / all);
   std::printf("max_angle_error_rad_vs_step_over_20=%.2e after %.2f s\n", max_error, frames * frame_s);
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_dynamics: %s\n", e.what());
+    return 1;
+  }
 }

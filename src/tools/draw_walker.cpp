@@ -6,6 +6,8 @@
 //   rosrun kneed_walker draw_walker --out walker_strip.png [--video walker.avi]
 //          [--strides 3] [--snapshots 10] [--height 1.75] [--mass 70]
 #include <CLI/CLI.hpp>
+
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -13,11 +15,12 @@
 #include <cstdio>
 
 #include "kneed_walker/core/optimizer/periodic_gait.h"
+#include "options.h"
 #include "kneed_walker/core/dynamics/walker_drawing.h"
 
 namespace kw = kneed_walker::core;
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Draws the Kneed Walker walking: a PNG strip and optionally an animation."};
   std::string out = "walker_strip.png", video;
   int strides = 3, snapshots = 10, width = 1400, fps = 30;
@@ -28,9 +31,20 @@ int main(int argc, char** argv) {
   app.add_option("--snapshots", snapshots, "stick figures in the strip")->check(CLI::Range(2, 200));
   app.add_option("--width", width, "image width, px")->check(CLI::Range(200, 8000));
   app.add_option("--fps", fps, "animation frame rate")->check(CLI::Range(1, 240));
-  app.add_option("--height", height_m, "person's height, m")->check(CLI::Range(1.0, 2.3));
-  app.add_option("--mass", mass_kg, "person's mass, kg")->check(CLI::Range(20.0, 250.0));
+  app.add_option("--height", height_m, "person's height, m")->check(kneed_walker::tools::FiniteRange(1.0, 2.3));
+  app.add_option("--mass", mass_kg, "person's mass, kg")->check(kneed_walker::tools::FiniteRange(20.0, 250.0));
   CLI11_PARSE(app, argc, argv);
+  // Refuse outputs OpenCV cannot write before any work.
+  if (!cv::haveImageWriter(out)) {
+    std::fprintf(stderr, "draw_walker: --out %s: not an image file name OpenCV can write (.png, .jpg, ...)\n",
+                 out.c_str());
+    return 1;
+  }
+  if (!video.empty() && std::filesystem::path(video).extension() != ".avi") {
+    std::fprintf(stderr, "draw_walker: --video %s: the animation is written as MJPG in an .avi file\n",
+                 video.c_str());
+    return 1;
+  }
 
   const kw::dynamics::WalkerSimulator sim(kw::dynamics::scaleToPerson(kw::dynamics::mcGeerProportions(), height_m, mass_kg));
   kw::dynamics::WalkerControls controls;
@@ -87,4 +101,13 @@ int main(int argc, char** argv) {
   std::printf("wrote %s (%d stick figures over %d strides, %.2f s)%s%s\n", out.c_str(), snapshots,
               strides, total_s, video.empty() ? "" : " and ", video.c_str());
   return end.fallen ? 1 : 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "draw_walker: %s\n", e.what());
+    return 1;
+  }
 }

@@ -28,6 +28,7 @@
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/optimizer/optimal_gaits.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
@@ -71,7 +72,7 @@ std::string clock(double seconds) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Solves the grid of optimal cyclic gaits and writes the gait table."};
   std::string out = "gait_table.yaml";
   bool resume = false, retry_failed = false;
@@ -93,9 +94,12 @@ int main(int argc, char** argv) {
   app.add_option("--seed-table", seed_table,
                  "warm-start the seed point from this table's gait there instead of by continuation "
                  "from McGeer's passive gait")->check(CLI::ExistingFile);
-  app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h");
-  app.add_option("--seed-step", seed_step, "seed grid point: step length, m");
-  app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad");
+  app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h")
+      ->check(kneed_walker::tools::FiniteRange(0.1, 20))->capture_default_str();
+  app.add_option("--seed-step", seed_step, "seed grid point: step length, m")
+      ->check(kneed_walker::tools::FiniteRange(0.1, 3))->capture_default_str();
+  app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad")
+      ->check(kneed_walker::tools::FiniteRange(-0.5, 0.5))->capture_default_str();
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
@@ -123,6 +127,19 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "optimize_gaits: %s\n", e.what());
       return 1;
     }
+  }
+
+  // Hours of work must not be lost to an unwritable --out: write the table's temporary file
+  // once before starting.
+  {
+    const std::string probe = out + ".tmp.yaml";
+    std::FILE* file = std::fopen(probe.c_str(), "w");
+    if (!file) {
+      std::fprintf(stderr, "optimize_gaits: --out %s: cannot write there\n", out.c_str());
+      return 1;
+    }
+    std::fclose(file);
+    std::filesystem::remove(probe);
   }
 
   kw::optimizer::GaitOptimizerOptions options;
@@ -296,4 +313,14 @@ int main(int argc, char** argv) {
                tty ? "\n" : "", feasible, grid.size(), unreached, clock(elapsed()).c_str(),
                threads, out.c_str());
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // A table that cannot be read (--resume, --seed-table) or written is one line, not an abort.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "optimize_gaits: %s\n", e.what());
+    return 1;
+  }
 }

@@ -14,6 +14,7 @@
 
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/prior/walker_prior.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
@@ -30,14 +31,14 @@ int main(int argc, char** argv) {
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
       ->check(CLI::ExistingFile)->capture_default_str();
-  app.add_option("--speed", speed_kmh, "gait speed, km/h");
-  app.add_option("--step", step_m, "gait step length, m");
-  app.add_option("--slope", slope, "ground slope, rad");
+  app.add_option("--speed", speed_kmh, "gait speed, km/h")->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--step", step_m, "gait step length, m")->check(kneed_walker::tools::FiniteRange(0.1, 3));
+  app.add_option("--slope", slope, "ground slope, rad")->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
   app.add_option("--strides", strides, "strides to sample")->check(CLI::Range(1, 1000000));
   app.add_option("--chain", chain, "strides a particle walks on before a fresh one starts")->check(CLI::Range(1, 1000000));
-  app.add_option("--fps", fps, "frame rate of the transitions, for the reference person")->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--fps", fps, "frame rate of the transitions, for the reference person")->check(kneed_walker::tools::FiniteRange(1.0, 1000.0));
   app.add_option("--seed", seed, "random seed");
-  app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(CLI::Range(0.0, 100.0));
+  app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(kneed_walker::tools::FiniteRange(0.0, 100.0));
   CLI11_PARSE(app, argc, argv);
   try {
     const kw::gait::GaitTable table =
