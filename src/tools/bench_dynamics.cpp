@@ -15,6 +15,7 @@
 
 #include "median.h"
 #include "options.h"
+#include "tool_main.h"
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/optimizer/periodic_gait.h"
 
@@ -112,10 +113,5 @@ int run(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_dynamics: %s\n", e.what());
-    return 1;
-  }
+  return kneed_walker::tools::runTool("bench_dynamics", run, argc, argv);
 }

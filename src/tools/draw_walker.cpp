@@ -16,6 +16,7 @@
 
 #include "kneed_walker/core/optimizer/periodic_gait.h"
 #include "options.h"
+#include "tool_main.h"
 #include "kneed_walker/core/dynamics/walker_drawing.h"
 
 namespace kw = kneed_walker::core;
@@ -104,10 +105,5 @@ int run(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "draw_walker: %s\n", e.what());
-    return 1;
-  }
+  return kneed_walker::tools::runTool("draw_walker", run, argc, argv);
 }

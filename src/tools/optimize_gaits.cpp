@@ -29,6 +29,7 @@
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/optimizer/optimal_gaits.h"
 #include "options.h"
+#include "tool_main.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
@@ -316,11 +317,5 @@ int run(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
-  // A table that cannot be read (--resume, --seed-table) or written is one line, not an abort.
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "optimize_gaits: %s\n", e.what());
-    return 1;
-  }
+  return kneed_walker::tools::runTool("optimize_gaits", run, argc, argv);
 }
