@@ -6,13 +6,12 @@
 //   rosrun kneed_walker draw_walker --out walker_strip.png [--video walker.avi]
 //          [--strides 3] [--snapshots 10] [--height 1.75] [--mass 70]
 #include <CLI/CLI.hpp>
-
-#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <cstdio>
+#include <filesystem>
 
 #include "kneed_walker/core/optimizer/periodic_gait.h"
 #include "options.h"
