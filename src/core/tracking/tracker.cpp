@@ -10,6 +10,7 @@
 
 #include "kneed_walker/core/common/config_file.h"
 #include "kneed_walker/core/dynamics/walker_model.h"
+#include "kneed_walker/core/vision/person_detector.h"
 
 namespace kneed_walker::core::tracking {
 namespace {
@@ -31,15 +32,10 @@ constexpr double kGaitChangeProbability = 0.3;
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
                           const cv::Rect2d& box) {
   if (!(box.width > 0 && box.height > 0)) throw std::invalid_argument("the person's box is empty");
-  // The ground point under the middle of the box's bottom edge (iterated for a sloped ground).
-  const Eigen::Vector2d foot_px(box.x + 0.5 * box.width, box.y + box.height);
-  double height = 0;
-  std::optional<Eigen::Vector3d> point;
-  for (int i = 0; i < 5; ++i) {
-    point = camera.groundPoint(foot_px, height);
-    if (!point) throw std::invalid_argument("the bottom of the person's box does not see the ground");
-    height = ground.height(point->head<2>());
-  }
+  // The ground point under the middle of the box's bottom edge.
+  const std::optional<Eigen::Vector3d> point =
+      vision::groundPointOnPlane(camera, ground, {box.x + 0.5 * box.width, box.y + box.height});
+  if (!point) throw std::invalid_argument("the bottom of the person's box does not see the ground");
   InitialGuess guess;
   guess.position_m = point->head<2>();
   guess.heading_sd_rad = M_PI;
@@ -252,6 +248,13 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   timing_.particles_ms = msSince(particles_at);
   timing_.total_ms = msSince(started_at);
   return estimate(report);
+}
+
+void Tracker::stop() {
+  filter_.reset();
+  evidence_.clear();
+  evidence_frames_.clear();
+  evidence_dt_s_.clear();
 }
 
 TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {

@@ -108,16 +108,15 @@ BackgroundModel BackgroundModel::learn(const std::vector<cv::Mat>& frames, const
   return model;
 }
 
-void BackgroundModel::logDensity(const cv::Mat& z, const cv::Rect& roi, cv::Mat& out) const {
+void BackgroundModel::squaredDistance(const cv::Mat& z, const cv::Rect& roi, cv::Mat& out) const {
   constexpr int C = kMeasurementChannels;
   if (z.size() != roi.size() || z.type() != CV_32FC(C) || (roi & cv::Rect(cv::Point(), size())) != roi)
-    throw std::invalid_argument("background log density: the measurements do not match the model's region");
+    throw std::invalid_argument("background model: the measurements do not match the model's region");
   out.create(roi.size(), CV_32F);
   for (int y = 0; y < roi.height; ++y) {
     const float* zr = z.ptr<float>(y);
     const float* mr = mean_.ptr<float>(roi.y + y) + roi.x * C;
     const float* wr = whitening_.ptr<float>(roi.y + y) + roi.x * 15;
-    const float* nr = log_normaliser_.ptr<float>(roi.y + y) + roi.x;
     float* o = out.ptr<float>(y);
     for (int x = 0; x < roi.width; ++x) {
       float d[C];
@@ -130,8 +129,17 @@ void BackgroundModel::logDensity(const cv::Mat& z, const cv::Rect& roi, cv::Mat&
         for (int c = 0; c <= r; ++c) e += w[t++] * d[c];
         squared += e * e;
       }
-      o[x] = nr[x] - 0.5f * squared;
+      o[x] = squared;
     }
+  }
+}
+
+void BackgroundModel::logDensity(const cv::Mat& z, const cv::Rect& roi, cv::Mat& out) const {
+  squaredDistance(z, roi, out);
+  for (int y = 0; y < roi.height; ++y) {
+    const float* nr = log_normaliser_.ptr<float>(roi.y + y) + roi.x;
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < roi.width; ++x) o[x] = nr[x] - 0.5f * o[x];
   }
 }
 

@@ -100,6 +100,11 @@ class Tracker {
   TrackEstimate track(const cv::Mat& bgr, double stamp_s);
 
   bool started() const { return filter_ != nullptr; }
+  // Ends the track (started() is false until the next start()).
+  void stop();
+  const vision::Camera& camera() const { return camera_; }
+  const vision::GroundPlane& ground() const { return ground_; }
+  int lagFrames() const { return options_.resample_lag_frames; }  // Δs
   const std::vector<TrackerParticle>& particles() const { return filter_->states(); }
   const std::vector<double>& logWeights() const { return filter_->logWeights(); }
   // The MAP state sequence over the buffered frames (oldest first) as body poses, and their frames.

@@ -1,0 +1,151 @@
+#include "kneed_walker/core/tracking/tracking_session.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "rendered_walk.h"
+
+namespace kneed_walker::core::tracking {
+namespace {
+
+const test::RenderedWalk& scene() {
+  static const test::RenderedWalk walk(2.5, 10, 4);
+  return walk;
+}
+
+std::unique_ptr<Tracker> makeTracker(int particles) {
+  const test::RenderedWalk& s = scene();
+  TrackerOptions options;
+  options.num_particles = particles;
+  options.resample_ess_threshold = particles / 10.0;
+  return std::make_unique<Tracker>(
+      s.camera, s.walk.ground, gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
+      prior::loadPriorOptions(test::configFile("prior.yaml")), options);
+}
+
+SessionOptions holding(int frames) {
+  SessionOptions options;
+  options.background_frames = frames;
+  return options;
+}
+
+// Feeds the whole walk; returns every answer.
+std::vector<SessionAnswer> run(TrackingSession& session) {
+  const test::RenderedWalk& s = scene();
+  std::vector<SessionAnswer> answers;
+  for (size_t f = 0; f < s.frames.size(); ++f)
+    for (SessionAnswer& a : session.feed(s.frames[f], 0.1 * f)) answers.push_back(std::move(a));
+  return answers;
+}
+
+TEST(TrackingSession, HoldsFramesToLearnTheBackgroundThenAnswersEachOnceInOrder) {
+  const test::RenderedWalk& s = scene();
+  TrackingSession session(makeTracker(200), holding(8));
+  for (int f = 0; f < 7; ++f) {
+    EXPECT_TRUE(session.feed(s.frames[f], 0.1 * f).empty());
+    EXPECT_EQ(session.state(), SessionState::kLearningBackground);
+  }
+  const std::vector<SessionAnswer> answers = session.feed(s.frames[7], 0.7);
+  ASSERT_EQ(answers.size(), 8u);
+  for (int f = 0; f < 8; ++f) {
+    EXPECT_EQ(answers[f].input, f);
+    EXPECT_DOUBLE_EQ(answers[f].stamp_s, 0.1 * f);
+  }
+  EXPECT_FALSE(session.tracker().background().empty());
+  EXPECT_EQ(session.feed(s.frames[8], 0.8).size(), 1u);
+}
+
+TEST(TrackingSession, FindsTheWalkerByItselfAndFollowsHer) {
+  const test::RenderedWalk& s = scene();
+  SessionOptions options = holding(10);
+  TrackingSession session(makeTracker(600), options);
+  const std::vector<SessionAnswer> answers = run(session);
+  ASSERT_EQ(answers.size(), s.frames.size());
+  int started_at = -1;
+  double error_m = 0;
+  int tracked = 0;
+  for (const SessionAnswer& a : answers) {
+    if (a.started && started_at < 0) started_at = a.input;
+    if (a.state != SessionState::kTracking) continue;
+    error_m += (a.estimate->pose.joints[body::kWaist] - s.walk.frames[a.input].pose.joints[body::kWaist]).norm();
+    ++tracked;
+  }
+  // The person is found once her blob has been seen heading_frames apart.
+  EXPECT_EQ(started_at, options.heading_frames);
+  for (int f = 0; f < started_at; ++f) EXPECT_EQ(answers[f].state, SessionState::kWaitingForPerson);
+  ASSERT_GT(tracked, 10);
+  std::cout << "found at frame " << started_at << "; mean waist error " << 1000 * error_m / tracked << " mm over "
+            << tracked << " frames\n";
+  EXPECT_LT(error_m / tracked, 0.35);
+}
+
+// The person's box in the first frame, from the truth's joints.
+cv::Rect2d truthBox() {
+  const test::RenderedWalk& s = scene();
+  cv::Rect2d box;
+  for (const Eigen::Vector3d& joint : s.walk.frames[0].pose.joints) {
+    const Eigen::Vector2d px = *s.camera.project(joint);
+    box = box.area() == 0 ? cv::Rect2d(px.x(), px.y(), 1, 1) : box | cv::Rect2d(px.x(), px.y(), 1, 1);
+  }
+  return box;
+}
+
+TEST(TrackingSession, GivesEveryTrackedFrameOneMapFrame) {
+  TrackingSession session(makeTracker(200), holding(10));
+  session.startFromBox(truthBox());
+  std::vector<int> estimated, mapped;
+  for (const SessionAnswer& a : run(session)) {
+    if (a.estimate) estimated.push_back(a.input);
+    for (const MapFrame& m : a.map_frames) mapped.push_back(m.input);
+  }
+  for (const MapFrame& m : session.finish()) mapped.push_back(m.input);
+  ASSERT_FALSE(estimated.empty());
+  EXPECT_EQ(estimated.front(), 0);  // started at once from the box
+  std::sort(mapped.begin(), mapped.end());
+  EXPECT_EQ(mapped, estimated);
+  EXPECT_FALSE(session.tracker().started());
+}
+
+TEST(TrackingSession, SameFramesAndSeedGiveTheSameAnswers) {
+  TrackingSession a(makeTracker(200), holding(10)), b(makeTracker(200), holding(10));
+  const std::vector<SessionAnswer> first = run(a), second = run(b);
+  ASSERT_EQ(first.size(), second.size());
+  for (size_t f = 0; f < first.size(); ++f) {
+    ASSERT_EQ(first[f].state, second[f].state);
+    if (first[f].estimate)
+      for (int j = 0; j < body::kNumBodyJoints; ++j)
+        EXPECT_EQ(first[f].estimate->pose.joints[j], second[f].estimate->pose.joints[j]);
+  }
+}
+
+TEST(TrackingSession, ResetStartsOverAndRefusesAFrameOfAnotherSize) {
+  const test::RenderedWalk& s = scene();
+  TrackingSession session(makeTracker(100), holding(3));
+  for (int f = 0; f < 5; ++f) session.feed(s.frames[f], 0.1 * f);
+  EXPECT_THROW(session.feed(cv::Mat(10, 10, CV_8UC3), 0.5), std::invalid_argument);
+  EXPECT_THROW(session.feed(s.frames[5], std::nan("")), std::invalid_argument);
+  EXPECT_EQ(session.framesFed(), 5);
+  session.reset();  // a bag looped
+  EXPECT_EQ(session.framesFed(), 0);
+  EXPECT_EQ(session.state(), SessionState::kLearningBackground);
+  EXPECT_TRUE(session.feed(s.frames[0], 0.0).empty());
+}
+
+TEST(TrackingSession, RefusesBadOptionsNamingThem) {
+  SessionOptions options;
+  options.background_frames = 0;
+  options.min_walk_m = std::nan("");
+  try {
+    TrackingSession session(makeTracker(10), options);
+    FAIL() << "accepted bad options";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("background_frames"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("min_walk_m"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace kneed_walker::core::tracking
