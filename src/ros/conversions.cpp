@@ -46,6 +46,12 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
              info.distortion_model != sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL) {
     problem << "camera_info distortion model '" << info.distortion_model
             << "' is not supported (plumb_bob or rational_polynomial)";
+  } else if (!std::all_of(info.D.begin(), info.D.end(), [](double d) { return std::isfinite(d); })) {
+    problem << "camera_info D holds a value that is not finite";
+  } else if (!(info.D.empty() || info.D.size() == 4 || info.D.size() == 5 || info.D.size() == 8) ||
+             (info.distortion_model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL && info.D.size() != 8)) {
+    problem << "camera_info D has " << info.D.size() << " coefficients for model '" << info.distortion_model
+            << "' (plumb_bob: 4 or 5, rational_polynomial: 8)";
   } else if (image.header.frame_id.empty()) {
     problem << "image header has no frame_id (needed to place the camera in tf)";
   }
@@ -108,6 +114,175 @@ core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometr
   if (std::all_of(distortion.begin(), distortion.end(), [](double d) { return d == 0.0; })) distortion.clear();
   return core::vision::Camera(k, distortion, camera_to_world.transpose(), -camera_to_world.transpose() * centre,
                 static_cast<int>(info.width), static_cast<int>(info.height));
+}
+
+namespace {
+
+geometry_msgs::Quaternion yawQuaternion(double yaw_rad) {
+  geometry_msgs::Quaternion q;
+  q.z = std::sin(0.5 * yaw_rad);
+  q.w = std::cos(0.5 * yaw_rad);
+  return q;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point point;
+  point.x = p.x();
+  point.y = p.y();
+  point.z = p.z();
+  return point;
+}
+
+// The root's pose covariance (x, y, z, rotation about X, Y, Z): the mid-hip's spread, the
+// heading's; roll and pitch are not estimated (the walker stays upright in its plane): small.
+boost::array<double, 36> rootCovariance(const core::tracking::TrackEstimate& e) {
+  boost::array<double, 36> covariance{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) covariance[6 * r + c] = e.waist_covariance_m2(r, c);
+  covariance[6 * 3 + 3] = covariance[6 * 4 + 4] = 1e-4;
+  covariance[6 * 5 + 5] = e.heading_sd_rad * e.heading_sd_rad;
+  return covariance;
+}
+
+// The skeleton's bones as joint pairs.
+constexpr std::array<std::array<core::body::BodyJoint, 2>, 8> kBones = {{
+    {core::body::kWaist, core::body::kNeck},
+    {core::body::kNeck, core::body::kHead},
+    {core::body::kWaist, core::body::kLeftHip},
+    {core::body::kWaist, core::body::kRightHip},
+    {core::body::kLeftHip, core::body::kLeftKnee},
+    {core::body::kLeftKnee, core::body::kLeftAnkle},
+    {core::body::kRightHip, core::body::kRightKnee},
+    {core::body::kRightKnee, core::body::kRightAnkle},
+}};
+
+std_msgs::ColorRGBA jointColour(core::body::BodyJoint joint) {
+  std_msgs::ColorRGBA colour;
+  colour.a = 1;
+  const std::string name = core::body::jointName(joint);
+  if (name.rfind("l_", 0) == 0) {
+    colour.r = 0.2f, colour.g = 0.5f, colour.b = 1.0f;  // left: blue
+  } else if (name.rfind("r_", 0) == 0) {
+    colour.r = 1.0f, colour.g = 0.3f, colour.b = 0.2f;  // right: red
+  } else {
+    colour.r = colour.g = colour.b = 0.9f;  // trunk and head: white
+  }
+  return colour;
+}
+
+}  // namespace
+
+BodyPose toBodyPose(const core::tracking::TrackEstimate& e, const std_msgs::Header& header, const std::string& body_id) {
+  BodyPose message;
+  message.header = header;
+  message.body_id = body_id;
+  message.root.pose.position = toPoint(e.pose.joints[core::body::kWaist]);
+  message.root.pose.orientation = yawQuaternion(e.heading_rad);
+  message.root.covariance = rootCovariance(e);
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
+    message.joint_names.push_back(core::body::jointName(core::body::BodyJoint(j)));
+    message.joint_positions.push_back(toPoint(e.pose.joints[j]));
+    message.joint_position_std.push_back(e.joint_sd_m[j].norm());
+  }
+  return message;
+}
+
+geometry_msgs::PoseWithCovarianceStamped toPose(const core::tracking::TrackEstimate& e, const std_msgs::Header& header) {
+  geometry_msgs::PoseWithCovarianceStamped message;
+  message.header = header;
+  message.pose.pose.position = toPoint(e.pose.joints[core::body::kWaist]);
+  message.pose.pose.orientation = yawQuaternion(e.heading_rad);
+  message.pose.covariance = rootCovariance(e);
+  return message;
+}
+
+WalkerState toWalkerState(const core::tracking::TrackEstimate& e, const std_msgs::Header& header) {
+  WalkerState message;
+  message.header = header;
+  message.stance_leg = e.walker.stance_leg == core::dynamics::Leg::kLeft ? WalkerState::LEFT : WalkerState::RIGHT;
+  for (int i = 0; i < 5; ++i) {
+    message.q[i] = e.walker.q[i];
+    message.qdot[i] = e.walker.qdot[i];
+  }
+  message.ground_slope = e.gait_slope_rad;
+  message.time_in_stride = e.walker.time_in_stride;
+  message.stride_count = e.walker.heel_strikes;
+  return message;
+}
+
+std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::TrackEstimate& e,
+                                                          const std_msgs::Header& header, const std::string& body_id) {
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  const std::string root = "body_" + body_id;
+  geometry_msgs::TransformStamped body;
+  body.header = header;
+  body.child_frame_id = root;
+  const Eigen::Vector3d& waist = e.pose.joints[core::body::kWaist];
+  body.transform.translation.x = waist.x();
+  body.transform.translation.y = waist.y();
+  body.transform.translation.z = waist.z();
+  body.transform.rotation = yawQuaternion(e.heading_rad);
+  transforms.push_back(body);
+  const Eigen::Matrix3d world_to_body = Eigen::AngleAxisd(e.heading_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
+    if (j == core::body::kWaist) continue;  // body_<id> is the mid-hip
+    geometry_msgs::TransformStamped joint;
+    joint.header.stamp = header.stamp;
+    joint.header.frame_id = root;
+    joint.child_frame_id = std::string(core::body::jointName(core::body::BodyJoint(j))) + "_" + body_id;
+    const Eigen::Vector3d offset = world_to_body * (e.pose.joints[j] - waist);
+    joint.transform.translation.x = offset.x();
+    joint.transform.translation.y = offset.y();
+    joint.transform.translation.z = offset.z();
+    joint.transform.rotation.w = 1;
+    transforms.push_back(joint);
+  }
+  return transforms;
+}
+
+visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& e, const std_msgs::Header& header,
+                                          const std::string& body_id, double lifetime_s) {
+  visualization_msgs::MarkerArray markers;
+  visualization_msgs::Marker bones;
+  bones.header = header;
+  bones.ns = "skeleton_" + body_id;
+  bones.type = visualization_msgs::Marker::LINE_LIST;
+  bones.action = visualization_msgs::Marker::ADD;
+  bones.pose.orientation.w = 1;
+  bones.scale.x = 0.04;  // line width, m
+  bones.lifetime = ros::Duration(lifetime_s);
+  for (const auto& [from, to] : kBones) {
+    bones.points.push_back(toPoint(e.pose.joints[from]));
+    bones.points.push_back(toPoint(e.pose.joints[to]));
+    bones.colors.push_back(jointColour(to));
+    bones.colors.push_back(jointColour(to));
+  }
+  visualization_msgs::Marker joints = bones;
+  joints.ns = "joints_" + body_id;
+  joints.type = visualization_msgs::Marker::SPHERE_LIST;
+  joints.scale.x = joints.scale.y = joints.scale.z = 0.07;  // sphere diameter, m
+  joints.points.clear();
+  joints.colors.clear();
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
+    joints.points.push_back(toPoint(e.pose.joints[j]));
+    joints.colors.push_back(jointColour(core::body::BodyJoint(j)));
+  }
+  markers.markers = {bones, joints};
+  return markers;
+}
+
+geometry_msgs::PoseArray toParticleCloud(const std::vector<core::tracking::TrackerParticle>& particles,
+                                         const std_msgs::Header& header) {
+  geometry_msgs::PoseArray cloud;
+  cloud.header = header;
+  cloud.poses.reserve(particles.size());
+  for (const core::tracking::TrackerParticle& p : particles) {
+    geometry_msgs::Pose pose;
+    pose.position = toPoint(p.joints[core::body::kWaist].cast<double>());
+    pose.orientation = yawQuaternion(p.body.placement.value.heading_rad);
+    cloud.poses.push_back(pose);
+  }
+  return cloud;
 }
 
 }  // namespace kneed_walker::ros_glue

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -47,6 +49,23 @@ class ParameterReader {
     if (!fetch(name, raw)) return;
     if (raw.getType() != XmlRpc::XmlRpcValue::TypeString) return wrongType(name, "a string");
     value = static_cast<std::string>(raw);
+  }
+  // A list of numbers (integers allowed).
+  void read(const std::string& name, std::vector<double>& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!fetch(name, raw)) return;
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeArray) return wrongType(name, "a list of numbers");
+    std::vector<double> numbers;
+    for (int i = 0; i < raw.size(); ++i) {
+      if (raw[i].getType() == XmlRpc::XmlRpcValue::TypeInt) {
+        numbers.push_back(static_cast<int>(raw[i]));
+      } else if (raw[i].getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+        numbers.push_back(static_cast<double>(raw[i]));
+      } else {
+        return wrongType(name, "a list of numbers");
+      }
+    }
+    value = numbers;
   }
   void read(const std::string& name, std::uint64_t& value) {
     int as_int = static_cast<int>(value);
@@ -119,6 +138,37 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("image_queue_size", r.image_queue_size);
   reader.read("publish_particle_cloud", r.publish_particle_cloud);
   reader.read("publish_tf", r.publish_tf);
+  reader.read("particle_cloud_interval_s", r.particle_cloud_interval_s);
+  reader.read("publish_overlay", r.publish_overlay);
+  reader.read("camera_file", r.camera_file);
+  reader.read("camera_file_unit_m", r.camera_file_unit_m);
+  reader.read("init_box", r.init_box);
+  reader.read("gait_table", r.gait_table);
+  reader.read("prior_config", r.prior_config);
+  reader.read("walker_model", r.walker_model);
+
+  core::tracking::SessionOptions& session = config.session;
+  reader.read("background_frames", session.background_frames);
+  reader.read("heading_frames", session.heading_frames);
+  reader.read("find_people", session.find_people);
+  for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
+  if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
+    reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +
+                      " is outside [0, 3600]");
+  if (!(std::isfinite(r.camera_file_unit_m) && r.camera_file_unit_m >= 1e-6 && r.camera_file_unit_m <= 1e3))
+    reader.addProblem(reader.qualified("camera_file_unit_m") + " = " + std::to_string(r.camera_file_unit_m) +
+                      " is outside [1e-06, 1000]");
+  if (!r.init_box.empty()) {
+    const auto& b = r.init_box;
+    const bool finite = std::all_of(b.begin(), b.end(), [](double v) { return std::isfinite(v); });
+    if (b.size() != 4 || !finite || !(b[2] > b[0] && b[3] > b[1]))
+      reader.addProblem(reader.qualified("init_box") + " must be [x1, y1, x2, y2] in pixels, finite, with x2 > x1 and y2 > y1");
+  }
+  for (const auto& [name, path] : {std::pair<const char*, const std::string*>{"camera_file", &r.camera_file},
+                                   {"gait_table", &r.gait_table}, {"prior_config", &r.prior_config},
+                                   {"walker_model", &r.walker_model}})
+    if (!path->empty() && !std::ifstream(*path))
+      reader.addProblem(reader.qualified(name) + " = '" + *path + "': cannot read the file");
 
   for (const auto& problem : validate(t)) reader.addProblem(reader.qualified(problem));
   if (r.world_frame.empty() || r.world_frame.front() == '/')

@@ -2,75 +2,144 @@
 //
 // A thin wrapper (robot_localization's pattern): parameters are loaded and validated once
 // (bad values refuse the nodelet with a message naming them), every ROS <-> core conversion
-// is in conversions.cpp, and the algorithm lives in the ROS-free core.
+// is in conversions.cpp, and the tracking is the core's TrackingSession, the same that
+// track_offline runs, so the same frames and seed give the same poses online and offline.
 //
 // Inputs:  image (sensor_msgs/Image) + camera_info (sensor_msgs/CameraInfo), via
-//          image_transport, in the nodelet's namespace (remap them).
+//          image_transport (raw or compressed: ~image_transport), in the nodelet's namespace
+//          (remap them). The camera's pose: tf's world_frame -> camera_info's frame, or the
+//          ~camera_file calibration.
 // Outputs: ~body_pose (kneed_walker/BodyPose), ~pose (geometry_msgs/PoseWithCovarianceStamped),
-//          ~walker_state (kneed_walker/WalkerState), ~status (kneed_walker/TrackingStatus),
-//          ~particle_cloud (geometry_msgs/PoseArray), ~markers (visualization_msgs/MarkerArray),
-//          /tf (body_<id> and REP 155 joint frames), /diagnostics.
+//          ~walker_state (kneed_walker/WalkerState), ~status (kneed_walker/TrackingStatus, latched),
+//          ~particle_cloud (geometry_msgs/PoseArray, throttled), ~markers
+//          (visualization_msgs/MarkerArray), ~overlay (sensor_msgs/Image), /tf (body_<id> and
+//          REP 155 joint frames), /diagnostics. All stamped with the image's time.
 //
-// Callbacks run on this nodelet's single-threaded queue; the per-particle work will use its
-// own worker threads (core::tracking::TrackerOptions::num_threads).
+// Threads: the subscriber callback only hands the newest frame to a worker thread and
+// returns; a frame that arrives while the worker is busy replaces the one waiting, which is
+// dropped and counted. The worker runs the tracker (its per-particle work on all cores).
+#include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <geometry_msgs/PoseArray.h>
-#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <diagnostic_updater/update_functions.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
+#include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
-#include <visualization_msgs/MarkerArray.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <boost/make_shared.hpp>
 #include <chrono>
+#include <condition_variable>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
-#include "kneed_walker/BodyPose.h"
 #include "kneed_walker/TrackingStatus.h"
-#include "kneed_walker/WalkerState.h"
+#include "kneed_walker/core/prior/walker_prior.h"
+#include "kneed_walker/core/tracking/tracking_session.h"
+#include "kneed_walker/core/vision/overlay.h"
 #include "kneed_walker/ros/conversions.h"
 #include "kneed_walker/ros/parameters.h"
 
 namespace kneed_walker::ros_glue {
 
+namespace kw = core;
+
 class TrackerNodelet : public nodelet::Nodelet {
+ public:
+  ~TrackerNodelet() override;
+
  private:
+  struct Frame {
+    sensor_msgs::ImageConstPtr image;
+    sensor_msgs::CameraInfoConstPtr info;
+  };
+
   void onInit() override;
-  void onFrame(const sensor_msgs::ImageConstPtr& image,
-               const sensor_msgs::CameraInfoConstPtr& info);
+  void onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  void workerLoop();
+  void process(const Frame& frame);
+  // The session for this frame's camera: made on the first frame, made again when the image
+  // size changes. Empty string on success, else why the frame cannot be used.
+  std::string prepareSession(const Frame& frame);
+  void publishAnswer(const kw::tracking::SessionAnswer& answer, const sensor_msgs::ImageConstPtr& image);
   void skipFrame(const std_msgs::Header& header, const std::string& reason);
-  void publishStatus(const std_msgs::Header& header, uint8_t state, double processing_time_s);
+  void publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
+                     const kw::tracking::TrackEstimate* estimate);
   void reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   TrackerNodeConfig config_;
+  kw::gait::GaitTable prior_table_;
+  kw::prior::PriorOptions prior_options_;
+  std::optional<kw::vision::Camera> file_camera_;
+  kw::vision::GroundPlane file_ground_;
 
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   image_transport::CameraSubscriber camera_subscriber_;
-  ros::Publisher body_pose_publisher_;
-  ros::Publisher pose_publisher_;
-  ros::Publisher walker_state_publisher_;
-  ros::Publisher status_publisher_;
-  ros::Publisher particle_cloud_publisher_;
-  ros::Publisher markers_publisher_;
+  image_transport::Publisher overlay_publisher_;
+  ros::Publisher body_pose_publisher_, pose_publisher_, walker_state_publisher_, status_publisher_,
+      particle_cloud_publisher_, markers_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  double expected_rate_min_hz_ = 1, expected_rate_max_hz_ = 120;
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> input_rate_, output_rate_;
+  std::unique_ptr<diagnostic_updater::TimeStampStatus> output_latency_;
   ros::Timer diagnostics_timer_;
 
-  // Frame bookkeeping (touched only on this nodelet's single-threaded callback queue).
-  uint64_t frames_processed_ = 0;
-  uint64_t frames_skipped_ = 0;
+  // The frame waiting for the worker (newest wins) and the worker's stop flag.
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<Frame> waiting_;
+  bool stopping_ = false;
+  std::thread worker_;
+
+  // Worker state (touched only by the worker thread, read under stats_mutex_ by diagnostics).
+  std::unique_ptr<kw::tracking::TrackingSession> session_;
+  std::string session_frame_id_;
+  cv::Size session_size_;
+  std::map<int, sensor_msgs::ImageConstPtr> unanswered_;  // frames held by the session
   ros::Time last_stamp_;
-  std::string status_message_;
+  ros::WallTime last_cloud_;
+  std::mutex stats_mutex_;
+  uint64_t frames_received_ = 0, frames_dropped_ = 0, frames_processed_ = 0, frames_skipped_ = 0,
+           frames_answered_ = 0, resets_ = 0;
+  double last_effective_sample_size_ = 0, last_processing_s_ = 0;
+  std::string state_name_ = "waiting for frames", last_problem_;
 };
+
+TrackerNodelet::~TrackerNodelet() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
 
 void TrackerNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& private_nh = getPrivateNodeHandle();
   try {
     config_ = loadTrackerNodeConfig(private_nh);
-  } catch (const std::invalid_argument& e) {
+    const std::string package = ros::package::getPath("kneed_walker");
+    auto orPackage = [&](const std::string& path, const char* file) {
+      return path.empty() ? package + "/config/" + file : path;
+    };
+    prior_table_ = kw::gait::loadGaitTable(orPackage(config_.ros.gait_table, "prior_gait_table.yaml"),
+                                           kw::dynamics::loadBodyProportions(orPackage(config_.ros.walker_model, "walker_model.yaml")));
+    prior_options_ = kw::prior::loadPriorOptions(orPackage(config_.ros.prior_config, "prior.yaml"));
+    if (!config_.ros.camera_file.empty()) {
+      file_camera_ = kw::vision::Camera::load(config_.ros.camera_file, config_.ros.camera_file_unit_m);
+      file_ground_ = kw::vision::loadGroundPlane(config_.ros.camera_file);
+      config_.tracker.ground_slope_rad = file_ground_.slope_rad;
+    }
+  } catch (const std::exception& e) {
     NODELET_FATAL("refusing to start: %s", e.what());
     throw;  // nodelet::Loader reports the failed load and does not keep this nodelet
   }
@@ -78,77 +147,271 @@ void TrackerNodelet::onInit() {
   body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", 10);
   pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", 10);
-  status_publisher_ = private_nh.advertise<TrackingStatus>("status", 10);
+  status_publisher_ = private_nh.advertise<TrackingStatus>("status", 10, /*latch=*/true);
   if (config_.ros.publish_particle_cloud)
     particle_cloud_publisher_ = private_nh.advertise<geometry_msgs::PoseArray>("particle_cloud", 2);
   markers_publisher_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 2);
+  image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+  if (config_.ros.publish_overlay)
+    overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
   if (config_.ros.publish_tf) tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  if (!file_camera_) {
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+  }
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, private_nh, getName());
   diagnostics_->setHardwareID("camera");
   diagnostics_->add("tracker", this, &TrackerNodelet::reportDiagnostics);
-  diagnostics_timer_ = nh.createTimer(ros::Duration(1.0),
-                                      [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  input_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_hz_, &expected_rate_max_hz_), "input rate");
+  output_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_hz_, &expected_rate_max_hz_), "output rate");
+  output_latency_ = std::make_unique<diagnostic_updater::TimeStampStatus>(
+      diagnostic_updater::TimeStampStatusParam(-1.0, 5.0), "output latency");
+  diagnostics_->add(*input_rate_);
+  diagnostics_->add(*output_rate_);
+  diagnostics_->add(*output_latency_);
+  diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
 
-  image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+  std_msgs::Header start;
+  start.stamp = ros::Time::now();
+  publishStatus(start, TrackingStatus::WAITING, "waiting for frames", nullptr);
+
+  worker_ = std::thread(&TrackerNodelet::workerLoop, this);
   camera_subscriber_ = image_transport_->subscribeCamera(
-      "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame,
-      this);
-  status_message_ = "waiting for image + camera_info on " + camera_subscriber_.getTopic();
-  NODELET_INFO("tracking %d particles (seed %lu), person %.2f m %.1f kg; input %s",
-               config_.tracker.num_particles, static_cast<unsigned long>(config_.tracker.seed),
-               config_.tracker.person_height_m, config_.tracker.person_mass_kg,
-               camera_subscriber_.getTopic().c_str());
+      "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this);
+  NODELET_INFO("tracking %d particles (seed %lu), person %.2f m; input %s; camera %s", config_.tracker.num_particles,
+               static_cast<unsigned long>(config_.tracker.seed), config_.tracker.person_height_m,
+               camera_subscriber_.getTopic().c_str(),
+               file_camera_ ? config_.ros.camera_file.c_str() : ("camera_info + tf from " + config_.ros.world_frame).c_str());
 }
 
-void TrackerNodelet::onFrame(const sensor_msgs::ImageConstPtr& image,
-                             const sensor_msgs::CameraInfoConstPtr& info) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::string problem = frameProblem(*image, *info);
-  if (!problem.empty()) return skipFrame(image->header, problem);
-  if (!last_stamp_.isZero() && image->header.stamp <= last_stamp_)
-    return skipFrame(image->header, "stamp does not advance (a bag looped or was played twice?)");
-  last_stamp_ = image->header.stamp;
-  ++frames_processed_;
+void TrackerNodelet::onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info) {
+  input_rate_->tick();
+  {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++frames_received_;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (waiting_) {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++frames_dropped_;
+  }
+  waiting_ = Frame{image, info};
+  wake_.notify_one();
+}
 
-  // The tracker itself (likelihood + particle filter) is the next milestone of the core; until
-  // it exists, frames are validated and counted and no pose is published.
-  status_message_ = "frames are validated, but the tracker (likelihood + particle filter) is "
-                    "not implemented yet: no pose is published";
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  publishStatus(image->header, TrackingStatus::WAITING, elapsed_s);
+void TrackerNodelet::workerLoop() {
+  for (;;) {
+    Frame frame;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stopping_ || waiting_; });
+      if (stopping_) return;
+      frame = std::move(*waiting_);
+      waiting_.reset();
+    }
+    try {
+      process(frame);
+    } catch (const std::exception& e) {
+      // Nothing a message holds may stop the tracker: the frame is skipped and the track
+      // starts over.
+      if (session_) session_->reset();
+      unanswered_.clear();
+      skipFrame(frame.image->header, std::string("tracker error, starting over: ") + e.what());
+    }
+  }
+}
+
+std::string TrackerNodelet::prepareSession(const Frame& frame) {
+  const cv::Size size(static_cast<int>(frame.image->width), static_cast<int>(frame.image->height));
+  if (session_ && size == session_size_ && frame.image->header.frame_id == session_frame_id_) return "";
+  if (session_) {
+    NODELET_WARN("the images changed from %dx%d in '%s' to %dx%d in '%s': starting over", session_size_.width,
+                 session_size_.height, session_frame_id_.c_str(), size.width, size.height,
+                 frame.image->header.frame_id.c_str());
+    ++resets_;
+  }
+  session_.reset();
+  unanswered_.clear();
+  std::optional<kw::vision::Camera> camera = file_camera_;
+  if (camera) {
+    if (camera->width() != size.width || camera->height() != size.height)
+      return "the image is " + std::to_string(size.width) + "x" + std::to_string(size.height) + ", ~camera_file " +
+             config_.ros.camera_file + " is for " + std::to_string(camera->width()) + "x" +
+             std::to_string(camera->height());
+  } else {
+    geometry_msgs::TransformStamped pose;
+    try {
+      pose = tf_buffer_->lookupTransform(config_.ros.world_frame, frame.info->header.frame_id, ros::Time(0));
+    } catch (const tf2::TransformException& e) {
+      return "no camera pose: tf has no transform from " + config_.ros.world_frame + " to " +
+             frame.info->header.frame_id + " (" + e.what() + "); publish it (e.g. /tf_static) or set ~camera_file";
+    }
+    try {
+      camera = toCamera(*frame.info, pose);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+  }
+  const kw::vision::GroundPlane ground = file_camera_ ? file_ground_ : kw::vision::GroundPlane{};
+  session_ = std::make_unique<kw::tracking::TrackingSession>(
+      std::make_unique<kw::tracking::Tracker>(*camera, ground, prior_table_, prior_options_, config_.tracker),
+      config_.session);
+  session_size_ = size;
+  session_frame_id_ = frame.image->header.frame_id;
+  const auto& b = config_.ros.init_box;
+  if (!b.empty()) session_->startFromBox(cv::Rect2d(cv::Point2d(b[0], b[1]), cv::Point2d(b[2], b[3])));
+  return "";
+}
+
+void TrackerNodelet::process(const Frame& frame) {
+  const auto started = std::chrono::steady_clock::now();
+  const std_msgs::Header& header = frame.image->header;
+  std::string problem = frameProblem(*frame.image, *frame.info);
+  if (problem.empty() && frame.image->width * static_cast<uint64_t>(frame.image->height) > 64'000'000ull)
+    problem = "the image is " + std::to_string(frame.image->width) + "x" + std::to_string(frame.image->height) +
+              ", larger than the 64 megapixels this tracker takes";
+  if (problem.empty() && header.stamp.isZero()) problem = "the image has no stamp (0)";
+  if (!problem.empty()) return skipFrame(header, problem);
+  if (!last_stamp_.isZero() && header.stamp <= last_stamp_) {
+    // A bag that loops or was played again: the track starts over from this frame.
+    NODELET_WARN("the image stamp went back from %.3f to %.3f s (a bag looped?): starting over", last_stamp_.toSec(),
+                 header.stamp.toSec());
+    if (session_) session_->reset();
+    unanswered_.clear();
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++resets_;
+  }
+  last_stamp_ = header.stamp;
+  problem = prepareSession(frame);
+  if (!problem.empty()) return skipFrame(header, problem);
+
+  cv_bridge::CvImageConstPtr bgr;
+  try {
+    bgr = cv_bridge::toCvShare(frame.image, "bgr8");
+  } catch (const cv_bridge::Exception& e) {
+    return skipFrame(header, std::string("cannot convert the image to bgr8: ") + e.what());
+  }
+  std::vector<kw::tracking::SessionAnswer> answers;
+  try {
+    answers = session_->feed(bgr->image, header.stamp.toSec());
+  } catch (const std::invalid_argument& e) {
+    return skipFrame(header, e.what());
+  }
+  unanswered_[session_->framesFed() - 1] = frame.image;
+  {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++frames_processed_;
+    last_processing_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  }
+  if (answers.empty()) {
+    publishStatus(header, TrackingStatus::WAITING,
+                  std::string(kw::tracking::stateName(session_->state())) + " (" +
+                      std::to_string(session_->framesFed()) + "/" + std::to_string(config_.session.background_frames) +
+                      " frames)",
+                  nullptr);
+    return;
+  }
+  for (const kw::tracking::SessionAnswer& answer : answers) {
+    const auto held = unanswered_.find(answer.input);
+    publishAnswer(answer, held != unanswered_.end() ? held->second : frame.image);
+    if (held != unanswered_.end()) unanswered_.erase(held);
+  }
+}
+
+void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, const sensor_msgs::ImageConstPtr& image) {
+  std_msgs::Header header;
+  header.stamp = image->header.stamp;
+  header.frame_id = config_.ros.world_frame;
+  {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++frames_answered_;
+    state_name_ = kw::tracking::stateName(answer.state);
+    if (answer.estimate) last_effective_sample_size_ = answer.estimate->effective_sample_size;
+  }
+  if (!answer.message.empty() && (answer.started || answer.state == kw::tracking::SessionState::kLost))
+    NODELET_INFO("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
+  if (!answer.estimate) {
+    publishStatus(header, TrackingStatus::WAITING, answer.message, nullptr);
+    return;
+  }
+  const kw::tracking::TrackEstimate& estimate = *answer.estimate;
+  const std::string& id = config_.ros.body_id;
+  body_pose_publisher_.publish(boost::make_shared<BodyPose>(toBodyPose(estimate, header, id)));
+  pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
+  walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
+  markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0)));
+  if (tf_broadcaster_) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
+  const kw::tracking::Tracker& tracker = session_->tracker();
+  const ros::WallTime now = ros::WallTime::now();
+  if (config_.ros.publish_particle_cloud && tracker.started() &&
+      (now - last_cloud_).toSec() >= config_.ros.particle_cloud_interval_s) {
+    last_cloud_ = now;
+    particle_cloud_publisher_.publish(
+        boost::make_shared<geometry_msgs::PoseArray>(toParticleCloud(tracker.particles(), header)));
+  }
+  if (config_.ros.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) {
+    cv_bridge::CvImagePtr picture = cv_bridge::toCvCopy(image, "bgr8");
+    kw::vision::BodyOutlines outlines;
+    tracker.project(estimate.pose, outlines);
+    kw::vision::drawOverlay(picture->image, tracker.camera(), estimate.pose, outlines);
+    overlay_publisher_.publish(picture->toImageMsg());
+  }
+  publishStatus(header, answer.state == kw::tracking::SessionState::kLost ? TrackingStatus::LOST : TrackingStatus::TRACKING,
+                answer.message, &estimate);
+  output_rate_->tick();
+  output_latency_->tick(header.stamp);
 }
 
 void TrackerNodelet::skipFrame(const std_msgs::Header& header, const std::string& reason) {
-  ++frames_skipped_;
-  status_message_ = "skipped frame " + std::to_string(header.seq) + ": " + reason;
-  NODELET_WARN_THROTTLE(5.0, "%s (%lu skipped so far)", status_message_.c_str(),
-                        static_cast<unsigned long>(frames_skipped_));
-  publishStatus(header, TrackingStatus::WAITING, 0.0);
+  uint64_t skipped;
+  {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    skipped = ++frames_skipped_;
+    last_problem_ = reason;
+  }
+  NODELET_WARN_THROTTLE(5.0, "skipped a frame: %s (%lu skipped so far)", reason.c_str(),
+                        static_cast<unsigned long>(skipped));
+  publishStatus(header, TrackingStatus::WAITING, "skipped: " + reason, nullptr);
 }
 
-void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state,
-                                   double processing_time_s) {
+void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
+                                   const kw::tracking::TrackEstimate* estimate) {
   auto status = boost::make_shared<TrackingStatus>();
   status->header.stamp = header.stamp;
   status->header.frame_id = config_.ros.world_frame;
   status->state = state;
   status->num_particles = static_cast<uint32_t>(config_.tracker.num_particles);
-  status->processing_time = processing_time_s;
-  status->frames_processed = frames_processed_;
-  status->frames_skipped = frames_skipped_;
-  status->message = status_message_;
+  if (estimate) {
+    status->effective_sample_size = estimate->effective_sample_size;
+    status->resampled = estimate->resampled;
+    status->max_log_likelihood = estimate->map_log_likelihood;
+  }
+  {
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    status->processing_time = last_processing_s_;
+    status->frames_processed = frames_processed_;
+    status->frames_skipped = frames_skipped_ + frames_dropped_;
+  }
+  status->message = message;
   status_publisher_.publish(status);
 }
 
 void TrackerNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  const bool skipping = frames_skipped_ > 0;
-  status.summary(skipping ? diagnostic_msgs::DiagnosticStatus::WARN
-                          : diagnostic_msgs::DiagnosticStatus::OK,
-                 status_message_);
+  std::lock_guard<std::mutex> stats(stats_mutex_);
+  const bool troubled = frames_skipped_ > 0 || frames_dropped_ > 0;
+  status.summary(troubled ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+                 troubled && !last_problem_.empty() ? state_name_ + "; last skipped frame: " + last_problem_ : state_name_);
+  status.add("frames received", frames_received_);
   status.add("frames processed", frames_processed_);
-  status.add("frames skipped", frames_skipped_);
+  status.add("frames answered", frames_answered_);
+  status.add("frames dropped (arrived while busy)", frames_dropped_);
+  status.add("frames skipped (unusable)", frames_skipped_);
+  status.add("restarts (stamps went back, images changed)", resets_);
+  status.add("effective sample size", last_effective_sample_size_);
+  status.add("processing time (s)", last_processing_s_);
   status.add("particles", config_.tracker.num_particles);
   status.add("input", camera_subscriber_.getTopic());
 }

@@ -32,7 +32,7 @@
 #include <optional>
 #include <sstream>
 
-#include "kneed_walker/core/tracking/tracker.h"
+#include "kneed_walker/core/tracking/tracking_session.h"
 #include "kneed_walker/core/vision/overlay.h"
 #include "kneed_walker/ros/conversions.h"
 #include "median.h"
@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
   int first_frame = 0, max_frames = 0, background_samples = 25;
-  bool no_flow = false, filtered = false;
+  bool no_flow = false, filtered = false, background_from_start = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
   auto* input = app.add_option_group("input", "one of --bag, --video");
@@ -250,6 +250,9 @@ int main(int argc, char** argv) {
   app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
       ->capture_default_str()->check(CLI::Range(1, 1000));
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
+  app.add_flag("--background-from-start", background_from_start,
+               "learn the background from the first --background-samples frames, as the nodelet does, "
+               "instead of frames spread over the whole input");
   app.add_flag("--filtered", filtered,
                "write each frame's best particle as it comes, instead of the MAP state sequence (the best "
                "particle's ancestry, each frame written Δs frames later)");
@@ -267,10 +270,6 @@ int main(int argc, char** argv) {
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
-  if (init_box.empty() && boxes_path.empty() && init_position.empty()) {
-    std::fprintf(stderr, "track_offline: give --init-box, --boxes or --init-position (where the person starts)\n");
-    return 1;
-  }
   if (guess.min_speed_kmh > guess.max_speed_kmh) {
     std::fprintf(stderr, "track_offline: --min-speed %g exceeds --max-speed %g\n", guess.min_speed_kmh,
                  guess.max_speed_kmh);
@@ -315,15 +314,22 @@ int main(int argc, char** argv) {
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     likelihood.use_flow = !no_flow;
-    kw::tracking::Tracker tracker(*camera, ground, table, kw::prior::loadPriorOptions(prior_path), options, likelihood);
+    kw::tracking::SessionOptions session_options;
+    session_options.background_frames = background_samples;
+    kw::tracking::TrackingSession session(
+        std::make_unique<kw::tracking::Tracker>(*camera, ground, table, kw::prior::loadPriorOptions(prior_path),
+                                                options, likelihood),
+        session_options);
+    const kw::tracking::Tracker& tracker = session.tracker();
 
-    // The background: an image, or per-pixel statistics of frames spread over the input.
+    // The background: an image, frames spread over the input, or (--background-from-start) the
+    // session's own from the first frames.
     const int total = source->count();
     if (!background_path.empty()) {
       cv::Mat image = cv::imread(background_path);
       if (image.empty()) throw std::runtime_error("--background " + background_path + ": not a readable image");
-      tracker.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
-    } else {
+      session.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
+    } else if (!background_from_start) {
       std::vector<cv::Mat> samples;
       const int n = std::max(1, std::min(background_samples, total));
       cv::Mat frame;
@@ -334,147 +340,155 @@ int main(int argc, char** argv) {
           next = n == 1 ? total : static_cast<int>(static_cast<long>(samples.size()) * (total - 1) / (n - 1));
         }
       }
-      tracker.setBackground(kw::vision::BackgroundModel::learn(samples, likelihood.background));
+      session.setBackground(kw::vision::BackgroundModel::learn(samples, likelihood.background));
       source->rewind();
     }
 
-    csv << "frame,stamp,joint,x,y,z\n" << std::fixed;
-    std::map<int, std::pair<int, double>> inputs;  // tracker frame -> input frame index, stamp
-    int written = -1;                               // the last tracker frame written
-    auto writePose = [&](int frame, const kw::body::BodyPose& pose) {
-      if (frame <= written) return;
-      written = frame;
-      const auto [input, input_stamp] = inputs.at(frame);
+    // Where the person starts: a box, a position, the boxes CSV, or (none given) the session
+    // finds the walking person itself.
+    const std::map<int, std::vector<std::pair<cv::Rect2d, double>>> boxes =
+        boxes_path.empty() ? std::map<int, std::vector<std::pair<cv::Rect2d, double>>>{} : readBoxes(boxes_path);
+    auto guessAt = [&](const cv::Rect2d& box, int index) {
+      kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, box);
+      from_box.min_speed_kmh = guess.min_speed_kmh;
+      from_box.max_speed_kmh = guess.max_speed_kmh;
+      from_box.position_sd_m = guess.position_sd_m;
+      if (heading_given) {
+        from_box.heading_rad = guess.heading_rad;
+        from_box.heading_sd_rad = guess.heading_sd_rad;
+      } else {
+        // From the boxes a few frames on, if there are any; else any direction.
+        const std::optional<double> heading = headingFromBoxes(boxes, index, box, 5, *camera, ground);
+        from_box.heading_rad = heading.value_or(0.0);
+        from_box.heading_sd_rad = heading ? 0.5 : M_PI;
+      }
+      from_box.stance_leg = guess.stance_leg;
+      return from_box;
+    };
+    if (!init_position.empty()) {
+      guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
+      if (!heading_given) guess.heading_sd_rad = M_PI;
+      session.startFrom(guess);
+    } else if (!init_box.empty()) {
+      session.startFrom(guessAt(cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3])),
+                                first_frame));
+    } else if (!boxes_path.empty()) {
+      const std::optional<cv::Rect2d> box = bestBox(boxes, first_frame);
+      if (!box) throw std::runtime_error("no box for frame " + std::to_string(first_frame) + " in " + boxes_path);
+      session.startFrom(guessAt(*box, first_frame));
+    }
+
+    csv << "frame,stamp,joint,x,y,z\n" << std::fixed << std::setprecision(9);
+    std::vector<int> source_index;  // per session input: the input's frame index
+    auto writePose = [&](int input, double input_stamp, const kw::body::BodyPose& pose) {
       for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
         const Eigen::Vector3d& p = pose.joints[j];
-        csv << input << ',' << std::setprecision(6) << input_stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
+        csv << source_index.at(input) << ',' << input_stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
             << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
       }
     };
     std::vector<double> total_ms, precompute_ms, particles_ms;
     const bool tty = isatty(STDERR_FILENO);
-    cv::Mat frame;
-    double stamp = 0;
-    // The rest of a track's MAP state sequence (the frames not yet written), before it ends.
-    auto flushTrack = [&] {
-      if (!filtered) {
-        std::vector<int> frames;
-        const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
-        for (size_t i = 0; i < frames.size(); ++i) writePose(frames[i], poses[i]);
-      }
-      written = -1;  // a new track numbers its frames from 0 again
-      inputs.clear();
-    };
-    int index = -1, tracked = 0, lost = 0, resampled = 0, restarts = 0, restarts_at = 0, skipped = 0;
+    std::map<int, cv::Mat> unanswered;  // frames held by the session, for the overlay
+    int index = -1, tracked = 0, answered = 0, lost = 0, resampled = 0, starts = 0, skipped = 0;
     bool last_lost = false;
     cv::Point2d last_seen_px;
-    const std::map<int, std::vector<std::pair<cv::Rect2d, double>>> boxes =
-        boxes_path.empty() ? std::map<int, std::vector<std::pair<cv::Rect2d, double>>>{} : readBoxes(boxes_path);
+    auto answer = [&](const kw::tracking::SessionAnswer& a, bool latest) {
+      ++answered;
+      for (const kw::tracking::MapFrame& m : a.map_frames)
+        if (!filtered) writePose(m.input, m.stamp_s, m.pose);
+      cv::Mat picture;
+      if (!overlay_path.empty()) {
+        picture = unanswered.at(a.input);
+        unanswered.erase(a.input);
+      }
+      if (a.estimate) {
+        const kw::tracking::TrackEstimate& estimate = *a.estimate;
+        ++tracked;
+        starts += a.started;
+        lost += estimate.lost;
+        resampled += estimate.resampled;
+        if (filtered) writePose(a.input, a.stamp_s, estimate.pose);
+        if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist]))
+          last_seen_px = cv::Point2d(px->x(), px->y());
+        if (!overlay_path.empty()) {
+          std::vector<Eigen::Vector2f> cloud;
+          if (latest && tracker.started())
+            for (const auto& p : tracker.particles())
+              if (const auto px = camera->project(p.joints[kw::body::kWaist].cast<double>()))
+                cloud.push_back(px->cast<float>());
+          kw::vision::BodyOutlines outlines;
+          tracker.project(estimate.pose, outlines);
+          kw::vision::drawOverlay(picture, *camera, estimate.pose, outlines, cloud);
+        }
+      }
+      last_lost = a.state == kw::tracking::SessionState::kLost;
+      if (!overlay_path.empty()) {
+        cv::putText(picture,
+                    cv::format("frame %d  %s", source_index.at(a.input), kw::tracking::stateName(a.state)) +
+                        (a.estimate ? cv::format("  N_eff %.0f  %.1f km/h", a.estimate->effective_sample_size,
+                                                 a.estimate->speed_kmh)
+                                    : std::string()),
+                    {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+        overlay.write(picture);
+      }
+    };
+    cv::Mat frame;
+    double stamp = 0;
     while (source->next(frame, stamp)) {
       ++index;
       if (index < first_frame) continue;
-      if (max_frames > 0 && tracked >= max_frames) break;
-      kw::tracking::TrackEstimate estimate;
+      if (max_frames > 0 && session.framesFed() >= max_frames) break;
+      // A lost track starts again from the box nearest to where the person was last seen.
+      if (last_lost && !boxes_path.empty()) {
+        std::optional<cv::Rect2d> nearest;
+        double best = 1e300;
+        for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
+          const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
+          if (d < best) best = d, nearest = box;
+        }
+        if (nearest) {
+          kw::tracking::InitialGuess again = guessAt(*nearest, index);
+          again.stance_leg.reset();
+          session.startFrom(again);
+          last_lost = false;
+        }
+      }
+      std::vector<kw::tracking::SessionAnswer> answers;
       try {
-        // A lost track starts again from the box nearest to where the person was last seen.
-        if (tracker.started() && last_lost && !boxes_path.empty()) {
-          std::optional<cv::Rect2d> nearest;
-          double best = 1e300;
-          for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
-            const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
-            if (d < best) best = d, nearest = box;
-          }
-          if (nearest) {
-            flushTrack();
-            const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *nearest);
-            guess.position_m = from_box.position_m;
-            const std::optional<double> heading = headingFromBoxes(boxes, index, *nearest, 5, *camera, ground);
-            guess.heading_rad = heading.value_or(0.0);
-            guess.heading_sd_rad = heading ? 0.5 : M_PI;
-            guess.stance_leg.reset();
-            estimate = tracker.start(frame, stamp, guess);
-            ++restarts;
-          }
-        }
-        if (restarts_at != restarts) {
-          restarts_at = restarts;  // started again on this frame
-        } else if (!tracker.started()) {
-          if (!init_position.empty()) {
-            guess.position_m = Eigen::Vector2d(init_position[0], init_position[1]);
-            if (!heading_given) guess.heading_sd_rad = M_PI;
-          } else {
-            std::optional<cv::Rect2d> box;
-            if (!init_box.empty()) {
-              box = cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3]));
-            } else if (!boxes_path.empty()) {
-              box = bestBox(boxes, index);
-            } else {
-              throw std::runtime_error("give --init-box, --boxes or --init-position");
-            }
-            if (!box) throw std::runtime_error("no box for frame " + std::to_string(index) + " in " + boxes_path);
-            const kw::tracking::InitialGuess from_box = kw::tracking::guessFromBox(*camera, ground, *box);
-            guess.position_m = from_box.position_m;
-            if (!heading_given) {
-              // From the boxes a few frames on, if there are any; else any direction.
-              const std::optional<double> heading = headingFromBoxes(boxes, index, *box, 5, *camera, ground);
-              guess.heading_rad = heading.value_or(0.0);
-              guess.heading_sd_rad = heading ? 0.5 : M_PI;
-            }
-          }
-          estimate = tracker.start(frame, stamp, guess);
-        } else {
-          estimate = tracker.track(frame, stamp);
-        }
+        answers = session.feed(frame, stamp);
       } catch (const std::invalid_argument& e) {
         // A frame the tracker cannot use (another size, no ground under the box): skipped and counted.
         if (skipped++ == 0) std::fprintf(stderr, "\ntrack_offline: frame %d skipped: %s\n", index, e.what());
         continue;
       }
-      const kw::tracking::TrackerTiming& timing = tracker.timing();
-      if (tracked > 0) {
+      source_index.push_back(index);
+      if (!overlay_path.empty()) unanswered[session.framesFed() - 1] = frame.clone();
+      for (size_t i = 0; i < answers.size(); ++i) answer(answers[i], i + 1 == answers.size());
+      if (!answers.empty() && answers.back().estimate && answered > 1) {
+        const kw::tracking::TrackerTiming& timing = tracker.timing();
         total_ms.push_back(timing.total_ms);
         precompute_ms.push_back(timing.precompute_ms);
         particles_ms.push_back(timing.particles_ms);
       }
-      lost += estimate.lost;
-      resampled += estimate.resampled;
-      last_lost = estimate.lost;
-      if (!estimate.lost)
-        if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist])) last_seen_px = cv::Point2d(px->x(), px->y());
-      inputs[estimate.frame] = {index, stamp};
-      if (filtered) {
-        writePose(estimate.frame, estimate.pose);
-      } else {
-        // The MAP state sequence: a frame is written once Δs later frames have weighed its particles.
-        std::vector<int> frames;
-        const std::vector<kw::body::BodyPose> poses = tracker.mapPoses(&frames);
-        if (static_cast<int>(frames.size()) == options.resample_lag_frames + 1) writePose(frames.front(), poses.front());
-      }
-      if (!overlay_path.empty()) {
-        std::vector<Eigen::Vector2f> cloud;
-        for (const auto& p : tracker.particles())
-          if (const auto px = camera->project(p.joints[kw::body::kWaist].cast<double>())) cloud.push_back(px->cast<float>());
-        kw::vision::BodyOutlines outlines;
-        tracker.project(estimate.pose, outlines);
-        cv::Mat picture = frame.clone();
-        kw::vision::drawOverlay(picture, *camera, estimate.pose, outlines, cloud);
-        cv::putText(picture, cv::format("frame %d  N_eff %.0f  %.1f km/h%s", index, estimate.effective_sample_size,
-                                        estimate.speed_kmh, estimate.lost ? "  LOST" : ""),
-                    {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
-        overlay.write(picture);
-      }
-      ++tracked;
       const int todo = max_frames > 0 ? std::min(max_frames, total - first_frame) : total - first_frame;
-      const int width = 30, filled = todo > 0 ? std::min(width, width * tracked / todo) : width;
-      std::fprintf(stderr, "%s[%s%s] %d/%d frames, %.0f ms/frame, N_eff %.0f%s", tty ? "\r" : "",
-                   std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), tracked, todo,
-                   timing.total_ms, estimate.effective_sample_size, tty ? "" : "\n");
+      const int fed = session.framesFed();
+      const int width = 30, filled = todo > 0 ? std::min(width, width * fed / todo) : width;
+      std::fprintf(stderr, "%s[%s%s] %d/%d frames, %s%s", tty ? "\r" : "", std::string(filled, '#').c_str(),
+                   std::string(width - filled, '-').c_str(), fed, todo, kw::tracking::stateName(session.state()),
+                   tty ? "        " : "\n");
     }
     if (tty) std::fprintf(stderr, "\n");
-    if (tracked == 0) throw std::runtime_error("no frame was tracked");
-    flushTrack();
-    std::printf("frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d particles=%d\n",
-                tracked, skipped, lost, restarts, resampled, options.num_particles);
+    {
+      const std::vector<kw::tracking::SessionAnswer> rest = session.flushHeld();  // an input shorter than the samples
+      for (size_t i = 0; i < rest.size(); ++i) answer(rest[i], i + 1 == rest.size());
+    }
+    for (const kw::tracking::MapFrame& m : session.finish())
+      if (!filtered) writePose(m.input, m.stamp_s, m.pose);
+    if (tracked == 0) throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
+    std::printf("frames=%d tracked_frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d "
+                "particles=%d\n",
+                answered, tracked, skipped, lost, std::max(0, starts - 1), resampled, options.num_particles);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));
   } catch (const std::exception& e) {

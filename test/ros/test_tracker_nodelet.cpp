@@ -6,8 +6,11 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2_msgs/TFMessage.h>
 
+#include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -92,10 +95,13 @@ sensor_msgs::Image makeImage(uint32_t width, uint32_t height) {
   return image;
 }
 
-TEST(TrackerNodelet, CountsGoodFramesAndSkipsBadOnes) {
+// Bad input of every kind is skipped, counted and named in ~status; the nodelet survives it
+// and takes good frames again after it; a stamp that goes back (a looping bag) starts over.
+TEST(TrackerNodelet, SkipsAndNamesBadFramesAndTakesGoodOnesAfterThem) {
   ros::NodeHandle nh;
   ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("/camera/image_raw", 10);
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/camera/camera_info", 10);
+  ros::Publisher tf_pub = nh.advertise<tf2_msgs::TFMessage>("/tf_static", 1, /*latch=*/true);
   TrackingStatus last;
   int received = 0;
   ros::Subscriber status_sub = nh.subscribe<TrackingStatus>(
@@ -103,33 +109,76 @@ TEST(TrackerNodelet, CountsGoodFramesAndSkipsBadOnes) {
         last = *s;
         ++received;
       });
+  // ~status is latched: the nodelet's first word arrives before any frame.
+  ASSERT_TRUE(waitFor([&] { return received >= 1; }, 30.0)) << "no latched ~status";
+  EXPECT_EQ(last.state, TrackingStatus::WAITING);
+  EXPECT_EQ(last.frames_processed, 0u);
   ASSERT_TRUE(waitFor([&] {
-    return image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0 &&
-           status_sub.getNumPublishers() > 0;
+    return image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the nodelet did not subscribe to /camera/image_raw + /camera/camera_info";
+  // The camera 3 m up, looking along +X (optical z forward, x right = -Y, y down = -Z).
+  geometry_msgs::TransformStamped camera_pose;
+  camera_pose.header.frame_id = "world";
+  camera_pose.child_frame_id = "camera_optical";
+  camera_pose.transform.translation.z = 3;
+  camera_pose.transform.rotation.x = -0.5, camera_pose.transform.rotation.y = 0.5;
+  camera_pose.transform.rotation.z = -0.5, camera_pose.transform.rotation.w = 0.5;
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(camera_pose);
+  tf_pub.publish(tf);
+  ros::WallDuration(0.5).sleep();
 
-  // One good frame, then one whose camera_info has no focal length, then one older than the
-  // last accepted frame. Each pair shares its stamp so image_transport's synchroniser
-  // matches them.
-  const double stamps[] = {10.0, 10.1, 9.95};
-  for (int i = 0; i < 3; ++i) {
+  struct Case {
+    const char* what;
+    std::function<void(sensor_msgs::Image&, sensor_msgs::CameraInfo&)> spoil;
+    const char* expected;  // in ~status's message; empty: a good frame
+  };
+  const std::vector<Case> cases = {
+      {"good", [](auto&, auto&) {}, ""},
+      {"no focal length", [](auto&, auto& info) { info.K[0] = 0; }, "no valid focal length"},
+      {"NaN focal length", [](auto&, auto& info) { info.K[4] = std::nan(""); }, "no valid focal length"},
+      {"NaN distortion", [](auto&, auto& info) { info.D[1] = std::nan(""); }, "not finite"},
+      {"3 distortion coefficients", [](auto&, auto& info) { info.D.resize(3); }, "3 coefficients"},
+      {"unknown encoding", [](auto& image, auto&) { image.encoding = "32FC1"; }, "encoding '32FC1'"},
+      {"short data", [](auto& image, auto&) { image.data.resize(10); }, "bytes"},
+      {"camera_info of another size", [](auto&, auto& info) { info.width = 80; }, "camera_info is for 80x48"},
+      {"no frame id", [](auto& image, auto& info) { image.header.frame_id = info.header.frame_id = ""; }, "frame_id"},
+      {"good again", [](auto&, auto&) {}, ""},
+  };
+  double stamp = 10;
+  uint64_t processed = 0, skipped = 0;
+  for (const Case& c : cases) {
     sensor_msgs::Image image = makeImage(64, 48);
     sensor_msgs::CameraInfo info = makeInfo(64, 48);
-    if (i == 1) info.K[0] = 0;
-    image.header.stamp = info.header.stamp = ros::Time(stamps[i]);
+    image.header.stamp = info.header.stamp = ros::Time(stamp += 0.1);
     image.header.frame_id = info.header.frame_id = "camera_optical";
+    c.spoil(image, info);
+    const int before = received;
     info_pub.publish(info);
     image_pub.publish(image);
-    ASSERT_TRUE(waitFor([&] { return received == i + 1; }, 10.0)) << "no status for frame " << i;
-    if (i == 0) {
-      EXPECT_EQ(last.frames_processed, 1u);
-      EXPECT_EQ(last.frames_skipped, 0u);
+    ASSERT_TRUE(waitFor([&] { return received > before; }, 10.0)) << "no status for the frame: " << c.what;
+    if (*c.expected) {
+      ++skipped;
+      EXPECT_NE(last.message.find(c.expected), std::string::npos) << c.what << ": " << last.message;
+    } else {
+      ++processed;
+      EXPECT_NE(last.message.find("learning the background"), std::string::npos) << c.what << ": " << last.message;
     }
-    if (i == 1) EXPECT_NE(last.message.find("no valid focal length"), std::string::npos) << last.message;
+    EXPECT_EQ(last.frames_processed, processed) << c.what;
+    EXPECT_EQ(last.frames_skipped, skipped) << c.what;
   }
-  EXPECT_EQ(last.frames_processed, 1u);
-  EXPECT_EQ(last.frames_skipped, 2u);
-  EXPECT_NE(last.message.find("stamp does not advance"), std::string::npos) << last.message;
+  // A stamp older than the last: the nodelet starts over (the held frames are forgotten) and
+  // takes the frame.
+  sensor_msgs::Image image = makeImage(64, 48);
+  sensor_msgs::CameraInfo info = makeInfo(64, 48);
+  image.header.stamp = info.header.stamp = ros::Time(10.05);
+  image.header.frame_id = info.header.frame_id = "camera_optical";
+  const int before = received;
+  info_pub.publish(info);
+  image_pub.publish(image);
+  ASSERT_TRUE(waitFor([&] { return received > before; }, 10.0)) << "no status after the stamp went back";
+  EXPECT_EQ(last.frames_processed, processed + 1);
+  EXPECT_NE(last.message.find("(1/"), std::string::npos) << "did not start over: " << last.message;
   EXPECT_EQ(last.num_particles, 5000u);
   EXPECT_EQ(last.header.frame_id, "world");
 }

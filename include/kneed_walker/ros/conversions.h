@@ -6,7 +6,16 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <geometry_msgs/PoseArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <visualization_msgs/MarkerArray.h>
+
 #include <string>
+#include <vector>
+
+#include "kneed_walker/BodyPose.h"
+#include "kneed_walker/WalkerState.h"
+#include "kneed_walker/core/tracking/tracker.h"
 
 #include "kneed_walker/core/vision/camera.h"
 
@@ -30,5 +39,26 @@ geometry_msgs::TransformStamped cameraPose(const core::vision::Camera& camera, c
 // A core camera from CameraInfo intrinsics and the camera's pose in the world (the inverse of
 // the two above). Throws std::invalid_argument naming what is wrong.
 core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometry_msgs::TransformStamped& pose);
+
+// --- The tracker's outputs as messages -----------------------------------------------------
+// `header`: the image's stamp and the world frame. REP 155 names: body_<id> at the mid-hip
+// (x along the walking direction, z up), joint frames <joint>_<id> beneath it.
+
+BodyPose toBodyPose(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
+                    const std::string& body_id);
+// The mid-hip and walking direction with the particles' spread (as amcl's ~amcl_pose).
+geometry_msgs::PoseWithCovarianceStamped toPose(const core::tracking::TrackEstimate& estimate,
+                                                const std_msgs::Header& header);
+WalkerState toWalkerState(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header);
+// world -> body_<id>, and body_<id> -> each joint's frame.
+std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::TrackEstimate& estimate,
+                                                          const std_msgs::Header& header, const std::string& body_id);
+// The skeleton (bones as lines, joints as spheres), coloured left, right and trunk; they
+// expire after `lifetime_s` so a lost track's body does not linger.
+visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
+                                          const std::string& body_id, double lifetime_s);
+// Each particle's mid-hip, facing its walking direction.
+geometry_msgs::PoseArray toParticleCloud(const std::vector<core::tracking::TrackerParticle>& particles,
+                                         const std_msgs::Header& header);
 
 }  // namespace kneed_walker::ros_glue

@@ -9,8 +9,10 @@
 #include <ros/node_handle.h>
 
 #include <string>
+#include <vector>
 
 #include "kneed_walker/core/tracking/tracker_options.h"
+#include "kneed_walker/core/tracking/tracking_session.h"
 
 namespace kneed_walker::ros_glue {
 
@@ -18,13 +20,23 @@ namespace kneed_walker::ros_glue {
 struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
   std::string body_id = "1";          // REP 155 body id: root frame "body_<body_id>"
-  int image_queue_size = 2;           // input queue; older frames are dropped and counted
+  int image_queue_size = 1;           // subscriber queue; frames arriving while one is tracked are dropped and counted
   bool publish_particle_cloud = true;  // ~particle_cloud (geometry_msgs/PoseArray)
+  double particle_cloud_interval_s = 0.5;  // at most one ~particle_cloud per this interval, s
   bool publish_tf = true;              // body_<id> and joint frames on /tf
+  bool publish_overlay = true;         // ~overlay (sensor_msgs/Image): the body drawn on the frame
+  // The camera: a calibration file (OpenCV YAML as make_synthetic writes, with the ground
+  // plane) or, empty, camera_info's intrinsics and tf's world -> camera_info frame.
+  std::string camera_file;
+  double camera_file_unit_m = 0.001;   // metres per unit of the file's translation
+  std::vector<double> init_box;        // the person's box in the first tracked frame, x1 y1 x2 y2, px (empty: find them)
+  // The model's files; empty: the package's config/.
+  std::string gait_table, prior_config, walker_model;
 };
 
 struct TrackerNodeConfig {
   core::tracking::TrackerOptions tracker;
+  core::tracking::SessionOptions session;
   RosInterfaceOptions ros;
 };
 

@@ -341,6 +341,12 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   e.lost = frames_lost_ >= kLostAfterFrames;
   e.speed_kmh = bank_[particles[best].gait].speed_kmh;
   e.heading_rad = particles[best].body.placement.value.heading_rad;
+  const prior::BodyPrior& prior = *bank_[particles[best].gait].prior;
+  e.walker = particles[best].body.walker.walker;
+  e.walker.qdot /= prior.naturalTimeS();
+  e.walker.time_in_stride *= prior.naturalTimeS();
+  e.walker.stance_foot_x *= prior.legLengthM();
+  e.gait_slope_rad = prior.slopeRad();
   // Weighted spreads.
   std::array<Eigen::Vector3d, body::kNumBodyJoints> mean, second;
   mean.fill(Eigen::Vector3d::Zero());

@@ -48,6 +48,7 @@ class BodyPrior {
   const WalkerPrior& walkerPrior() const { return walker_prior_; }
   const body::BodyShape& shape() const { return shape_; }
   double legLengthM() const { return leg_length_m_; }
+  double naturalTimeS() const { return natural_time_s_; }  // √(L/g): one unit of the walker's time, s
   double slopeRad() const { return walker_prior_.gait().target.slope; }
 
  private:

@@ -64,6 +64,10 @@ struct TrackEstimate {
   Eigen::Matrix3d waist_covariance_m2 = Eigen::Matrix3d::Zero();
   double heading_rad = 0, heading_sd_rad = 0;
   double speed_kmh = 0;            // the MAP particle's gait
+  // The MAP particle's planar walker (paper §3) in SI units: q rad, q̇ rad/s, time_in_stride s,
+  // stance_foot_x m; and the slope of its gait, rad.
+  dynamics::WalkerState walker;
+  double gait_slope_rad = 0;
   double effective_sample_size = 0;
   bool resampled = false;
   double map_log_likelihood = 0;
