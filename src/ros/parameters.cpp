@@ -136,6 +136,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("world_frame", r.world_frame);
   reader.read("body_id", r.body_id);
   reader.read("image_queue_size", r.image_queue_size);
+  reader.read("image_transport", r.image_transport);
   reader.read("publish_particle_cloud", r.publish_particle_cloud);
   reader.read("publish_tf", r.publish_tf);
   reader.read("particle_cloud_interval_s", r.particle_cloud_interval_s);
@@ -158,6 +159,9 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   if (!(std::isfinite(r.camera_file_unit_m) && r.camera_file_unit_m >= 1e-6 && r.camera_file_unit_m <= 1e3))
     reader.addProblem(reader.qualified("camera_file_unit_m") + " = " + std::to_string(r.camera_file_unit_m) +
                       " is outside [1e-06, 1000]");
+  if (r.image_transport != "raw" && r.image_transport != "compressed" && r.image_transport != "theora")
+    reader.addProblem(reader.qualified("image_transport") + " = '" + r.image_transport +
+                      "' must be raw, compressed or theora");
   if (!r.init_box.empty()) {
     const auto& b = r.init_box;
     const bool finite = std::all_of(b.begin(), b.end(), [](double v) { return std::isfinite(v); });

@@ -144,10 +144,12 @@ void TrackerNodelet::onInit() {
     throw;  // nodelet::Loader reports the failed load and does not keep this nodelet
   }
 
-  body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", 10);
-  pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
-  walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", 10);
-  status_publisher_ = private_nh.advertise<TrackingStatus>("status", 10, /*latch=*/true);
+  // Once the background is learned, the held frames are answered at once: the queues hold them.
+  const uint32_t queue = static_cast<uint32_t>(config_.session.background_frames) + 10;
+  body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", queue);
+  pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", queue);
+  walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", queue);
+  status_publisher_ = private_nh.advertise<TrackingStatus>("status", queue, /*latch=*/true);
   if (config_.ros.publish_particle_cloud)
     particle_cloud_publisher_ = private_nh.advertise<geometry_msgs::PoseArray>("particle_cloud", 2);
   markers_publisher_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 2);
@@ -180,7 +182,8 @@ void TrackerNodelet::onInit() {
 
   worker_ = std::thread(&TrackerNodelet::workerLoop, this);
   camera_subscriber_ = image_transport_->subscribeCamera(
-      "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this);
+      "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this,
+      image_transport::TransportHints(config_.ros.image_transport, ros::TransportHints(), private_nh));
   NODELET_INFO("tracking %d particles (seed %lu), person %.2f m; input %s; camera %s", config_.tracker.num_particles,
                static_cast<unsigned long>(config_.tracker.seed), config_.tracker.person_height_m,
                camera_subscriber_.getTopic().c_str(),

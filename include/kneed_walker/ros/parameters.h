@@ -20,6 +20,7 @@ namespace kneed_walker::ros_glue {
 struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
   std::string body_id = "1";          // REP 155 body id: root frame "body_<body_id>"
+  std::string image_transport = "raw";  // raw or compressed (image_transport plugins)
   int image_queue_size = 1;           // subscriber queue; frames arriving while one is tracked are dropped and counted
   bool publish_particle_cloud = true;  // ~particle_cloud (geometry_msgs/PoseArray)
   double particle_cloud_interval_s = 0.5;  // at most one ~particle_cloud per this interval, s

@@ -1,0 +1,155 @@
+// Runs inside tracking_online.test: track.launch with a synthetic sequence's camera file. The
+// test publishes the sequence's frames one at a time, waiting for each frame's ~status, and
+// checks (1) every frame was answered and none dropped, (2) the joints stay within the
+// offline tracker's loose bound of the ground truth, (3) track_offline on the same frames
+// and seed gives the same joints (to 1e-9 m).
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kneed_walker/BodyPose.h"
+#include "kneed_walker/TrackingStatus.h"
+
+namespace kneed_walker::ros_glue {
+namespace {
+
+template <typename Pred>
+bool waitFor(Pred pred, double timeout_s) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (!pred() && ros::WallTime::now() < deadline && ros::ok()) {
+    ros::spinOnce();
+    ros::WallDuration(0.002).sleep();
+  }
+  return pred();
+}
+
+// Rows of a joints CSV (frame,stamp,joint,x,y,z) in file order.
+struct JointRow {
+  int frame;
+  std::string joint;
+  double x, y, z;
+};
+std::vector<JointRow> readJoints(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<JointRow> rows;
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string frame, stamp, joint, x, y, z;
+    std::getline(fields, frame, ','), std::getline(fields, stamp, ','), std::getline(fields, joint, ',');
+    std::getline(fields, x, ','), std::getline(fields, y, ','), std::getline(fields, z, ',');
+    rows.push_back({std::stoi(frame), joint, std::stod(x), std::stod(y), std::stod(z)});
+  }
+  return rows;
+}
+
+TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineAndStaysNearTheTruth) {
+  ros::NodeHandle nh, private_nh("~");
+  std::string sequence;
+  int particles = 0;
+  ASSERT_TRUE(private_nh.getParam("sequence", sequence));
+  ASSERT_TRUE(private_nh.getParam("particles", particles));
+
+  std::vector<sensor_msgs::Image::ConstPtr> images;
+  std::vector<sensor_msgs::CameraInfo::ConstPtr> infos;
+  rosbag::Bag bag(sequence + ".bag");
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (auto image = m.instantiate<sensor_msgs::Image>()) images.push_back(image);
+    if (auto info = m.instantiate<sensor_msgs::CameraInfo>()) infos.push_back(info);
+  }
+  ASSERT_EQ(images.size(), infos.size());
+  ASSERT_GT(images.size(), 20u);
+
+  ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("/camera/image_raw", 50);
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/camera/camera_info", 50);
+  std::map<ros::Time, BodyPose> poses;
+  std::map<ros::Time, TrackingStatus> statuses;
+  TrackingStatus last;
+  ros::Subscriber pose_sub = nh.subscribe<BodyPose>("/kneed_walker/body_pose", 100,
+                                                    [&](const BodyPoseConstPtr& p) { poses[p->header.stamp] = *p; });
+  ros::Subscriber status_sub = nh.subscribe<TrackingStatus>("/kneed_walker/status", 100, [&](const TrackingStatusConstPtr& s) {
+    statuses[s->header.stamp] = *s;
+    last = *s;
+  });
+  ASSERT_TRUE(waitFor([&] {
+    return image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0 && pose_sub.getNumPublishers() > 0 &&
+           status_sub.getNumPublishers() > 0;
+  }, 60.0)) << "track.launch's nodelet did not connect";
+
+  for (size_t f = 0; f < images.size(); ++f) {
+    info_pub.publish(infos[f]);
+    image_pub.publish(images[f]);
+    ASSERT_TRUE(waitFor([&] { return statuses.count(images[f]->header.stamp) > 0; }, 60.0)) << "no answer to frame " << f;
+  }
+  ASSERT_TRUE(waitFor([&] { return last.header.stamp == images.back()->header.stamp; }, 10.0));
+  EXPECT_EQ(last.frames_processed, images.size());
+  EXPECT_EQ(last.frames_skipped, 0u) << "frames were dropped or skipped: " << last.message;
+
+  // The same frames and seed through track_offline (as the nodelet: the background from the
+  // first frames, the person found in the image, each frame's filtered estimate).
+  const std::string csv = "/tmp/kneed_walker_tracking_online_" + std::to_string(getpid()) + ".csv";
+  const std::string command = std::string(KNEED_WALKER_TRACK_OFFLINE) + " --bag " + sequence + ".bag --camera " +
+                              sequence + "_camera.yml --background-from-start --background-samples 20 --filtered" +
+                              " --particles " + std::to_string(particles) + " --seed 1 --out-csv " + csv + " 2>&1";
+  ASSERT_EQ(std::system((command + " > /dev/null").c_str()), 0) << command;
+  const std::vector<JointRow> offline = readJoints(csv);
+  std::remove(csv.c_str());
+  ASSERT_FALSE(offline.empty());
+
+  // Compare frame by frame (frames are the bag's order).
+  std::map<int, std::map<std::string, const JointRow*>> offline_by_frame;
+  for (const JointRow& row : offline) offline_by_frame[row.frame][row.joint] = &row;
+  const std::vector<JointRow> truth = readJoints(sequence + "_ground_truth.csv");
+  std::map<int, std::map<std::string, const JointRow*>> truth_by_frame;
+  for (const JointRow& row : truth) truth_by_frame[row.frame][row.joint] = &row;
+  double worst_difference_m = 0, error_sum_m = 0;
+  int compared = 0, error_count = 0;
+  for (size_t f = 0; f < images.size(); ++f) {
+    const auto pose = poses.find(images[f]->header.stamp);
+    ASSERT_EQ(pose != poses.end(), offline_by_frame.count(static_cast<int>(f)) > 0)
+        << "frame " << f << ": the nodelet and track_offline disagree on whether it was tracked; the nodelet's status: "
+        << statuses[images[f]->header.stamp].message << " (" << poses.size() << " poses)";
+    if (pose == poses.end()) continue;
+    for (size_t j = 0; j < pose->second.joint_names.size(); ++j) {
+      const std::string& name = pose->second.joint_names[j];
+      const geometry_msgs::Point& p = pose->second.joint_positions[j];
+      const JointRow* o = offline_by_frame[f].at(name);
+      worst_difference_m = std::max({worst_difference_m, std::abs(p.x - o->x), std::abs(p.y - o->y), std::abs(p.z - o->z)});
+      ++compared;
+      if (truth_by_frame[f].count(name)) {
+        const JointRow* t = truth_by_frame[f].at(name);
+        error_sum_m += std::sqrt((p.x - t->x) * (p.x - t->x) + (p.y - t->y) * (p.y - t->y) + (p.z - t->z) * (p.z - t->z));
+        ++error_count;
+      }
+    }
+  }
+  ASSERT_GT(compared, 0) << "nothing was tracked";
+  const double mean_error_mm = 1000 * error_sum_m / error_count;
+  std::printf("frames %zu, tracked %zu; nodelet vs track_offline: largest difference %.3g m over %d joints; "
+              "mean joint error %.1f mm\n", images.size(), poses.size(), worst_difference_m, compared, mean_error_mm);
+  EXPECT_LE(worst_difference_m, 1e-9);
+  EXPECT_LT(mean_error_mm, 350.0);  // test/ros/check_tracking's loose bound
+}
+
+}  // namespace
+}  // namespace kneed_walker::ros_glue
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_tracking_online");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
