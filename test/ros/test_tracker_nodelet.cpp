@@ -16,21 +16,13 @@
 #include <stdexcept>
 
 #include "kneed_walker/TrackingStatus.h"
+#include "wait_for.h"
 #include "kneed_walker/ros/parameters.h"
 
 namespace kneed_walker::ros_glue {
 namespace {
 
-// Spins until pred() holds or timeout_s passes; returns pred().
-template <typename Pred>
-bool waitFor(Pred pred, double timeout_s) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (!pred() && ros::WallTime::now() < deadline && ros::ok()) {
-    ros::spinOnce();
-    ros::WallDuration(0.01).sleep();
-  }
-  return pred();
-}
+using test::waitFor;
 
 std::map<std::string, std::string> advertisedTopics() {
   ros::master::V_TopicInfo topics;

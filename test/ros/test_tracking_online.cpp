@@ -21,19 +21,12 @@
 
 #include "kneed_walker/BodyPose.h"
 #include "kneed_walker/TrackingStatus.h"
+#include "wait_for.h"
 
 namespace kneed_walker::ros_glue {
 namespace {
 
-template <typename Pred>
-bool waitFor(Pred pred, double timeout_s) {
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (!pred() && ros::WallTime::now() < deadline && ros::ok()) {
-    ros::spinOnce();
-    ros::WallDuration(0.002).sleep();
-  }
-  return pred();
-}
+using test::waitFor;
 
 // Rows of a joints CSV (frame,stamp,joint,x,y,z) in file order.
 struct JointRow {
