@@ -30,6 +30,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <boost/make_shared.hpp>
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <map>
@@ -180,6 +181,16 @@ void TrackerNodelet::onInit() {
   start.stamp = ros::Time::now();
   publishStatus(start, TrackingStatus::WAITING, "waiting for frames", nullptr);
 
+  // A transport whose plugin is not installed (Debian packages only raw) refuses the nodelet.
+  const std::vector<std::string> transports = image_transport_->getLoadableTransports();
+  if (std::find(transports.begin(), transports.end(), "image_transport/" + config_.ros.image_transport) ==
+      transports.end()) {
+    std::string list;
+    for (const std::string& t : transports) list += (list.empty() ? "" : ", ") + t.substr(t.find('/') + 1);
+    NODELET_FATAL("refusing to start: %s/image_transport = '%s' is not installed (installed: %s)",
+                  private_nh.getNamespace().c_str(), config_.ros.image_transport.c_str(), list.c_str());
+    throw std::invalid_argument("image_transport '" + config_.ros.image_transport + "' is not installed");
+  }
   worker_ = std::thread(&TrackerNodelet::workerLoop, this);
   camera_subscriber_ = image_transport_->subscribeCamera(
       "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this,
