@@ -276,7 +276,14 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
   session_size_ = size;
   session_frame_id_ = frame.image->header.frame_id;
   const auto& b = config_.ros.init_box;
-  if (!b.empty()) session_->startFromBox(cv::Rect2d(cv::Point2d(b[0], b[1]), cv::Point2d(b[2], b[3])));
+  if (!b.empty()) {
+    try {
+      session_->startFromBox(cv::Rect2d(cv::Point2d(b[0], b[1]), cv::Point2d(b[2], b[3])));
+    } catch (const std::invalid_argument& e) {
+      NODELET_ERROR("~init_box [%g, %g, %g, %g] cannot be used (%s): looking for the person instead", b[0], b[1],
+                    b[2], b[3], e.what());
+    }
+  }
   return "";
 }
 
@@ -345,6 +352,7 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     state_name_ = kw::tracking::stateName(answer.state);
     if (answer.estimate) last_effective_sample_size_ = answer.estimate->effective_sample_size;
   }
+  if (answer.start_failed) NODELET_ERROR("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
   if (!answer.message.empty() && (answer.started || answer.state == kw::tracking::SessionState::kLost))
     NODELET_INFO("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
   if (!answer.estimate) {

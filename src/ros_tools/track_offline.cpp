@@ -248,7 +248,7 @@ int main(int argc, char** argv) {
   app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--frames", max_frames, "track at most this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
-      ->capture_default_str()->check(CLI::Range(1, 1000));
+      ->capture_default_str()->check(CLI::Range(1, 500));
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
   app.add_flag("--background-from-start", background_from_start,
                "learn the background from the first --background-samples frames, as the nodelet does, "
@@ -370,8 +370,12 @@ int main(int argc, char** argv) {
       if (!heading_given) guess.heading_sd_rad = M_PI;
       session.startFrom(guess);
     } else if (!init_box.empty()) {
-      session.startFrom(guessAt(cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3])),
-                                first_frame));
+      try {
+        session.startFrom(guessAt(cv::Rect2d(cv::Point2d(init_box[0], init_box[1]), cv::Point2d(init_box[2], init_box[3])),
+                                  first_frame));
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(std::string("--init-box: ") + e.what());
+      }
     } else if (!boxes_path.empty()) {
       const std::optional<cv::Rect2d> box = bestBox(boxes, first_frame);
       if (!box) throw std::runtime_error("no box for frame " + std::to_string(first_frame) + " in " + boxes_path);
@@ -395,6 +399,7 @@ int main(int argc, char** argv) {
     cv::Point2d last_seen_px;
     auto answer = [&](const kw::tracking::SessionAnswer& a, bool latest) {
       ++answered;
+      if (a.start_failed) std::fprintf(stderr, "\ntrack_offline: frame %d: %s\n", source_index.at(a.input), a.message.c_str());
       for (const kw::tracking::MapFrame& m : a.map_frames)
         if (!filtered) writePose(m.input, m.stamp_s, m.pose);
       cv::Mat picture;

@@ -100,7 +100,16 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     if (tracker_->started()) answer.map_frames = endTrack();
     pending_guess_.reset();
     sightings_.clear();
-    estimate = tracker_->start(bgr, stamp_s, *guess);
+    try {
+      estimate = tracker_->start(bgr, stamp_s, *guess);
+    } catch (const std::invalid_argument& e) {
+      // The guess does not fit the image (e.g. a box around no person): the frame is
+      // answered as waiting and the person is looked for in the image instead.
+      state_ = answer.state = SessionState::kWaitingForPerson;
+      answer.start_failed = true;
+      answer.message = std::string("could not start from the guess: ") + e.what();
+      return answer;
+    }
     answer.started = true;
     char text[160];
     std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess->position_m.x(),

@@ -109,6 +109,20 @@ TEST(TrackingSession, GivesEveryTrackedFrameOneMapFrame) {
   EXPECT_FALSE(session.tracker().started());
 }
 
+// A box around no person cannot start a track: the frame is answered (waiting, saying why),
+// frames keep their numbers, and the session looks for the person instead.
+TEST(TrackingSession, ABoxAroundNobodyIsAnsweredAndThePersonFoundInstead) {
+  TrackingSession session(makeTracker(100), holding(10));
+  session.startFromBox(cv::Rect2d(0, 300, 10, 5));  // an empty corner of the ground
+  const std::vector<SessionAnswer> answers = run(session);
+  ASSERT_EQ(answers.size(), scene().frames.size());
+  for (size_t f = 0; f < answers.size(); ++f) EXPECT_EQ(answers[f].input, static_cast<int>(f));
+  EXPECT_TRUE(answers[0].start_failed);
+  EXPECT_EQ(answers[0].state, SessionState::kWaitingForPerson);
+  EXPECT_NE(answers[0].message.find("could not start"), std::string::npos) << answers[0].message;
+  EXPECT_TRUE(std::any_of(answers.begin(), answers.end(), [](const SessionAnswer& a) { return a.started; }));
+}
+
 TEST(TrackingSession, SameFramesAndSeedGiveTheSameAnswers) {
   TrackingSession a(makeTracker(200), holding(10)), b(makeTracker(200), holding(10));
   const std::vector<SessionAnswer> first = run(a), second = run(b);

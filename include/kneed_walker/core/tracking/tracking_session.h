@@ -56,6 +56,7 @@ struct SessionAnswer {
   double stamp_s = 0;
   SessionState state = SessionState::kWaitingForPerson;
   bool started = false;                   // a track started at this frame
+  bool start_failed = false;              // a given guess or box could not start a track (message says why)
   std::optional<TrackEstimate> estimate;  // this frame's filtered estimate (kTracking, kLost)
   // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
   // of a track when it ends.
