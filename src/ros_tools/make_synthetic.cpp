@@ -1,5 +1,7 @@
 // make_synthetic: a synthetic walking sequence with ground truth, for testing the tracker.
-// A person walks by the stochastic prior (paper §3.4) around a table gait, is rendered as the
+// A person walks by the stochastic prior (paper §3.4) around a table gait, or by measured
+// joint-angle curves (--norms: the Schwartz 2008 gait norms, a motion the prior did not make;
+// synthetic/norm_walk.h), is rendered as the
 // tracker's body model over a real background (the median of a video from the same static
 // camera) or a textured ground plane, with sensor noise and optionally an occluder crossing in
 // front. Writes into --out-dir:
@@ -34,6 +36,7 @@
 #include <sstream>
 
 #include "options.h"
+#include "kneed_walker/core/synthetic/norm_walk.h"
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/vision/background.h"
 #include "kneed_walker/ros/conversions.h"
@@ -52,6 +55,9 @@ struct Settings {
   double noise_sigma = 3.0;
   bool occluder = false;
   bool heading_given = false;
+  double oblique_deg = 0;  // the default heading turned away from the camera by this
+  std::string norms;       // drive the walk by these gait norms instead of the prior
+  double end_speed_kmh = 0;  // with norms: the speed at the end (0: the start speed)
   double start_stamp_s = 1.7e9;
   kw::synthetic::SyntheticWalkOptions walk;
 };
@@ -96,6 +102,33 @@ double pixelHeight(const kw::vision::Camera& camera, const kw::body::BodyPose& p
   return top && foot ? (*foot - *top).norm() : 0.0;
 }
 
+// The walk: by the gait norms (--norms) or by the prior around a table gait.
+kw::synthetic::SyntheticWalk synthesize(const Settings& s, const kw::synthetic::SyntheticWalkOptions& options) {
+  const kw::dynamics::BodyProportions proportions = kw::dynamics::loadBodyProportions(s.walker_model);
+  if (s.norms.empty())
+    return kw::synthetic::synthesizeWalk(kw::gait::loadGaitTable(s.table, proportions),
+                                         kw::prior::loadPriorOptions(s.prior), options);
+  kw::synthetic::NormWalkOptions norm;
+  norm.start_speed_kmh = options.speed_kmh;
+  norm.end_speed_kmh = s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh;
+  norm.heading_rad = options.heading_rad;
+  norm.start_m = options.start_m;
+  norm.duration_s = options.duration_s;
+  norm.fps = options.fps;
+  norm.person_height_m = options.person_height_m;
+  norm.seed = options.seed;
+  return kw::synthetic::synthesizeNormWalk(kw::gait::loadGaitNorms(s.norms), proportions, norm);
+}
+
+// Mean step length over the walk's whole steps (heel strike to heel strike), m; 0 if fewer than two.
+double meanStepLength(const kw::synthetic::SyntheticWalk& walk) {
+  std::vector<Eigen::Vector3d> strikes;
+  for (size_t i = 1; i < walk.frames.size(); ++i)
+    if (walk.frames[i].walker.heel_strikes != walk.frames[i - 1].walker.heel_strikes)
+      strikes.push_back(walk.frames[i].pose.joints[kw::body::kWaist]);
+  return strikes.size() < 2 ? 0.0 : (strikes.back() - strikes.front()).norm() / static_cast<double>(strikes.size() - 1);
+}
+
 int run(const Settings& s) {
   const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
   kw::synthetic::SyntheticWalkOptions options = s.walk;
@@ -111,10 +144,13 @@ int run(const Settings& s) {
     const auto ahead = camera.project(*start + 0.5 * Eigen::Vector3d(across.normalized().x(), across.normalized().y(), 0));
     const double sign = ahead && ahead->x() < start_pixel.x() ? 1.0 : -1.0;
     options.heading_rad = std::atan2(sign * across.y(), sign * across.x());
+    // Turned away from the camera by --oblique: counter-clockwise when that leads away from it.
+    const double turn = s.oblique_deg * M_PI / 180.0;
+    const Eigen::Vector2d direction(std::cos(options.heading_rad), std::sin(options.heading_rad));
+    const double cross = direction.x() * from_camera.y() - direction.y() * from_camera.x();
+    options.heading_rad += (cross > 0 ? 1.0 : -1.0) * turn;
   }
-  const kw::synthetic::SyntheticWalk walk =
-      kw::synthetic::synthesizeWalk(kw::gait::loadGaitTable(s.table, kw::dynamics::loadBodyProportions(s.walker_model)),
-                                    kw::prior::loadPriorOptions(s.prior), options);
+  const kw::synthetic::SyntheticWalk walk = synthesize(s, options);
   const kw::body::BodyShape shape = kw::body::BodyShape::forHeight(options.person_height_m);
   const cv::Mat scene = background(s, camera, walk.ground);
   const kw::synthetic::SyntheticFrame& middle = walk.frames[walk.frames.size() / 2];
@@ -175,11 +211,18 @@ int run(const Settings& s) {
     largest_px = std::max(largest_px, px);
   }
   bag.close();
-  std::printf("make_synthetic: %zu frames at %.1f fps, %.2f km/h, %.2f m steps, slope %.3f rad, seed %llu "
-              "(%d prior sample%s)\n",
-              walk.frames.size(), options.fps, options.speed_kmh, options.step_length_m,
-              options.slope_rad, static_cast<unsigned long long>(options.seed), walk.attempts,
-              walk.attempts == 1 ? "" : "s");
+  if (s.norms.empty())
+    std::printf("make_synthetic: %zu frames at %.1f fps, %.2f km/h, %.2f m steps, slope %.3f rad, seed %llu "
+                "(%d prior sample%s)\n",
+                walk.frames.size(), options.fps, options.speed_kmh, options.step_length_m,
+                options.slope_rad, static_cast<unsigned long long>(options.seed), walk.attempts,
+                walk.attempts == 1 ? "" : "s");
+  else
+    std::printf("make_synthetic: %zu frames at %.1f fps, walked by the gait norms %s at %.2f to %.2f km/h, "
+                "%.2f m mean steps, level, heading %.3f rad, seed %llu\n",
+                walk.frames.size(), options.fps, s.norms.c_str(), options.speed_kmh,
+                s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh, meanStepLength(walk),
+                options.heading_rad, static_cast<unsigned long long>(options.seed));
   std::printf("person %.0f-%.0f px tall; wrote %s.bag, %s_ground_truth.csv, %s_camera.yml, %s.avi\n",
               smallest_px, largest_px, stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
   return 0;
@@ -211,9 +254,19 @@ int main(int argc, char** argv) {
   app.add_option("--walker-model", s.walker_model, "body proportions; the table must be made for them")
       ->capture_default_str()->check(CLI::ExistingFile);
   app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 20));
-  app.add_option("--step", w.step_length_m, "step length, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
-  app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill")->capture_default_str()
-      ->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
+  auto* step = app.add_option("--step", w.step_length_m, "step length, m (not with --norms: the norms set it)")
+                   ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
+  auto* slope = app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill (not with --norms)")
+                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
+  app.add_option("--norms", s.norms,
+                 "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
+                 "prior did not make")->check(CLI::ExistingFile)->excludes(step)->excludes(slope);
+  app.add_option("--end-speed", s.end_speed_kmh,
+                 "with --norms: the speed at the end, km/h; the speed changes linearly from --speed (default: --speed)")
+      ->check(kneed_walker::tools::FiniteRange(0.5, 10));
+  app.add_option("--oblique", s.oblique_deg,
+                 "turn the default walking direction (across the view) away from the camera by this, degrees")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-80, 80));
   app.add_option("--heading", w.heading_rad,
                  "walking direction in the world XY plane, rad from +X towards +Y; default: across the view, "
                  "towards the image's left")->check(kneed_walker::tools::FiniteRange(-10, 10));
@@ -231,6 +284,14 @@ int main(int argc, char** argv) {
       ->check(kneed_walker::tools::FiniteRange(1e-3, 4e9));
   CLI11_PARSE(app, argc, argv);
   s.heading_given = app.count("--heading") > 0;
+  if (s.heading_given && app.count("--oblique") > 0) {
+    std::fprintf(stderr, "make_synthetic: --oblique turns the default heading; give it or --heading, not both\n");
+    return 2;
+  }
+  if (s.end_speed_kmh > 0 && s.norms.empty()) {
+    std::fprintf(stderr, "make_synthetic: --end-speed needs --norms (the prior walks at one speed)\n");
+    return 2;
+  }
   try {
     ros::Time::init();
     return run(s);

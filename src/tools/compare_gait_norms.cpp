@@ -16,10 +16,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <map>
-#include <sstream>
 
+#include "kneed_walker/core/gait/gait_norms.h"
 #include "kneed_walker/core/gait/gait_table.h"
 #include "package_files.h"
 
@@ -31,41 +29,6 @@ constexpr double kDegrees = 180.0 / M_PI;
 const std::array<const char*, 3> kJoints = {"Trunk Ant/Posterior Tilt", "Hip Flex/Extension",
                                             "Knee Flex/Extension"};
 const std::array<const char*, 3> kShortNames = {"trunk_tilt", "hip_flexion", "knee_flexion"};
-
-struct Norm {
-  std::vector<double> cycle, low, mean, high;  // % cycle as a fraction; degrees
-};
-
-// The norms of one speed class (columns: name, % cycle, then -1sd, mean, +1sd per class).
-std::map<std::string, Norm> readNorms(const std::string& path, const std::string& speed_class) {
-  std::ifstream file(path);
-  if (!file) throw std::runtime_error("cannot read " + path);
-  std::string header, subheader, line;
-  std::getline(file, header);
-  std::getline(file, subheader);
-  std::vector<std::string> classes;
-  std::stringstream h(header);
-  for (std::string cell; std::getline(h, cell, ',');) classes.push_back(cell);
-  int column = -1;
-  for (size_t i = 0; i < classes.size(); ++i)
-    if (classes[i] == speed_class) column = static_cast<int>(i);
-  if (column < 0) throw std::runtime_error(path + " has no speed class '" + speed_class + "'");
-  std::map<std::string, Norm> norms;
-  while (std::getline(file, line)) {
-    std::vector<std::string> cells;
-    std::stringstream row(line);
-    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
-    if (static_cast<int>(cells.size()) <= column + 2) continue;
-    Norm& n = norms[cells[0]];
-    n.cycle.push_back(std::stod(cells[1]));
-    n.low.push_back(std::stod(cells[column]));
-    n.mean.push_back(std::stod(cells[column + 1]));
-    n.high.push_back(std::stod(cells[column + 2]));
-  }
-  for (const char* joint : kJoints)
-    if (!norms.count(joint)) throw std::runtime_error(path + " has no '" + joint + "' rows");
-  return norms;
-}
 
 // The left leg's joint angles (degrees) at a state, in the norms' conventions.
 std::array<double, 3> leftLegAngles(const kw::dynamics::WalkerState& s, double slope) {
@@ -96,7 +59,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const auto norms = readNorms(norms_path, speed_class);
+    const kw::gait::GaitNorms all_norms = kw::gait::loadGaitNorms(norms_path);
+    const kw::gait::NormSpeedClass& norms = all_norms.speedClass(speed_class);
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, 0.0);
@@ -112,7 +76,7 @@ int main(int argc, char** argv) {
       cycle_time += stride.duration;
       probe = stride.end;
     }
-    const Norm& reference = norms.at(kJoints[0]);
+    const kw::gait::NormCurve& reference = norms.curve(kJoints[0]);
     std::vector<std::array<double, 3>> model(reference.cycle.size());
     kw::dynamics::WalkerState s = gait.start;
     double t = 0;
@@ -131,7 +95,7 @@ int main(int argc, char** argv) {
                 cycle_time * std::sqrt(table.grid.referenceLegLength() / table.grid.gravity),
                 speed_class.c_str());
     for (int j = 0; j < 3; ++j) {
-      const Norm& n = norms.at(kJoints[j]);
+      const kw::gait::NormCurve& n = norms.curve(kJoints[j]);
       double sum = 0, lo = 1e9, hi = -1e9;
       for (size_t i = 0; i < n.cycle.size(); ++i) {
         const double d = model[i][j] - n.mean[i];
