@@ -1,8 +1,10 @@
 // track_offline: the tracker (paper §4) on a recorded sequence, frame by frame, deterministic for
 // a seed: a rosbag (image + camera_info topics; the camera's pose from /tf_static or a camera
 // file) or a video with a camera file. Writes the MAP joints per frame as CSV
-// `frame,stamp,joint,x,y,z` (the synthetic ground truth's format), optionally an overlay video,
-// and prints the timing.
+// `frame,stamp,joint,x,y,z` (the synthetic ground truth's format): by default each track's
+// whole MAP state sequence, one particle's path written when the track ends (--lagged: each
+// frame Δs frames later, as the nodelet; --filtered: each frame's best particle at once),
+// optionally an overlay video, and prints the timing.
 //
 //   rosrun kneed_walker track_offline --bag seq.bag --camera seq_camera.yml --init-box 300 200 350 320
 //       --out-csv estimate.csv [--overlay overlay.avi]                                 (one line)
@@ -199,7 +201,7 @@ int main(int argc, char** argv) {
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
   int first_frame = 0, max_frames = 0, background_samples = 25;
-  bool no_flow = false, filtered = false, background_from_start = false;
+  bool no_flow = false, filtered = false, lagged = false, background_from_start = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
   auto* input = app.add_option_group("input", "one of --bag, --video");
@@ -253,9 +255,14 @@ int main(int argc, char** argv) {
   app.add_flag("--background-from-start", background_from_start,
                "learn the background from the first --background-samples frames, as the nodelet does, "
                "instead of frames spread over the whole input");
-  app.add_flag("--filtered", filtered,
-               "write each frame's best particle as it comes, instead of the MAP state sequence (the best "
-               "particle's ancestry, each frame written Δs frames later)");
+  auto* filtered_flag = app.add_flag("--filtered", filtered,
+                                     "write each frame's best particle as it comes, instead of each track's whole MAP "
+                                     "state sequence (one particle's path, written when the track ends)");
+  app.add_flag("--lagged", lagged,
+               "write each frame's MAP state Δs frames later, as the nodelet publishes it (the best particle's "
+               "ancestry through the buffer; consecutive frames may come from different particles), instead "
+               "of each track's whole MAP state sequence")
+      ->excludes(filtered_flag);
   app.add_flag("--no-flow", no_flow, "leave the optical flow out of the likelihood");
   app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str()
       ->check(FiniteRange(0.0, 100.0));
@@ -270,6 +277,7 @@ int main(int argc, char** argv) {
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
+  options.keep_whole_path = !filtered && !lagged;
   if (guess.min_speed_kmh > guess.max_speed_kmh) {
     std::fprintf(stderr, "track_offline: --min-speed %g exceeds --max-speed %g\n", guess.min_speed_kmh,
                  guess.max_speed_kmh);

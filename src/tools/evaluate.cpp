@@ -4,19 +4,25 @@
 //   mean_joint_error_mm=     mean Euclidean joint error, world frame (MPJPE, global)
 //   root_relative_error_mm=  the same with each pose's mid-hip (waist) subtracted
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150)
-//   footskate_mm=            mean horizontal slide of the estimated stance foot (the lower ankle,
-//                            on the ground: within --contact-mm of its lowest height) between
-//                            adjacent frames while it stays the stance foot. The walker's feet
-//                            roll, so its stance ankle moves even without slip: the truth's own
-//                            figure (truth_footskate_mm=) is the reference
-//   ground_penetration_mm=   mean depth of the estimated soles (ankle less --ankle-height) below
-//                            the ground (truth_ground_penetration_mm= the truth's)
+//   footskate_mm=            mean slip of the estimated stance foot along the ground between
+//                            adjacent frames: the walker's rolling foot, recovered from knee and
+//                            ankle (body::rollingFoot), moves by −R·Δφ as it rolls; what it moves
+//                            beyond that is slip. The stance foot of a pair of frames is the foot
+//                            on the ground in both (its sole within --contact-mm) that slips least
+//                            (near a heel strike both feet are near the ground and the lower one
+//                            may be the one landing). truth_footskate_mm= is the truth's own (0
+//                            up to the recovery's approximation, body_model.h)
+//   ground_penetration_mm=   mean depth of the estimated lower sole below the ground
+//                            (truth_ground_penetration_mm= the truth's)
 // and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
 //
 //   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--ground CAMERA.yml] [--lost-mm 150]
+//          [--height 1.75] [--walker-model config/walker_model.yaml]
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -27,6 +33,7 @@
 #include "kneed_walker/core/body/body_model.h"
 #include "kneed_walker/core/vision/ground_plane.h"
 #include "options.h"
+#include "package_files.h"
 
 namespace kw = kneed_walker::core;
 using kneed_walker::tools::FiniteRange;
@@ -67,17 +74,20 @@ std::map<int, Pose> readPoses(const std::string& path) {
 int main(int argc, char** argv) {
   CLI::App app{"Joint errors, lost frames, foot skate and ground penetration of a track against ground truth."};
   std::string truth_path, estimate_path, ground_path;
-  double lost_mm = 150, contact_mm = 20, ankle_height_m = 0.068;
+  double lost_mm = 150, contact_mm = 5, height_m = 1.75;
+  std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("truth", truth_path, "ground truth CSV")->required()->check(CLI::ExistingFile);
   app.add_option("estimate", estimate_path, "estimate CSV")->required()->check(CLI::ExistingFile);
   app.add_option("--ground", ground_path, "calibration file with the ground plane (default: level Z = 0)")
       ->check(CLI::ExistingFile);
   app.add_option("--lost-mm", lost_mm, "a frame whose mean joint error exceeds this is lost")->capture_default_str()
       ->check(FiniteRange(1e-3, 1e6));
-  app.add_option("--contact-mm", contact_mm, "an ankle within this of its lowest height is on the ground")
+  app.add_option("--contact-mm", contact_mm, "a sole within this of the ground is on it")
       ->capture_default_str()->check(FiniteRange(1e-3, 1e3));
-  app.add_option("--ankle-height", ankle_height_m, "ankle above the sole, m (0.039 x height)")->capture_default_str()
-      ->check(FiniteRange(0.0, 0.3));
+  app.add_option("--height", height_m, "the person's height, m (sizes the rolling feet)")->capture_default_str()
+      ->check(FiniteRange(1.0, 2.3));
+  app.add_option("--walker-model", walker_model, "body proportions (the feet's radius and offset)")
+      ->capture_default_str()->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   try {
     const auto truth = readPoses(truth_path), estimate = readPoses(estimate_path);
@@ -109,30 +119,53 @@ int main(int argc, char** argv) {
     }
     if (frames == 0) throw std::runtime_error("no frame with common joints in both files");
     // Foot skate and penetration, of the estimate and (for reference) of the truth.
+    const kw::body::FootGeometry foot =
+        kw::body::FootGeometry::of(kw::dynamics::loadBodyProportions(walker_model), height_m);
+    const Eigen::Vector3d up = ground.normal();
     struct Contact {
       double skate_mm = 0, penetration_mm = 0;
     };
     auto contact = [&](const std::map<int, Pose>& poses) {
       double skate = 0, penetration = 0;
       int skate_count = 0, penetration_count = 0;
-      const Pose* previous = nullptr;
-      std::string previous_foot;
+      struct Feet {
+        std::array<kw::body::RollingFoot, 2> feet;  // left, right
+        std::array<bool, 2> on_ground{};
+        Eigen::Vector3d forward;
+        int frame = -2;  // -2: none yet
+      } previous;
+      static const char* const kJoints[2][2] = {{"l_knee", "l_ankle"}, {"r_knee", "r_ankle"}};
       for (const auto& [frame, pose] : poses) {
-        if (!pose.count("l_ankle") || !pose.count("r_ankle")) {
-          previous = nullptr;
-          continue;
+        const bool complete = pose.count("l_hip") && pose.count("r_hip") && pose.count("l_knee") &&
+                              pose.count("r_knee") && pose.count("l_ankle") && pose.count("r_ankle");
+        if (!complete) continue;
+        Feet now;
+        now.frame = frame;
+        now.forward = (pose.at("l_hip") - pose.at("r_hip")).cross(up).normalized();
+        double lowest = 1e9;
+        for (int side : {0, 1}) {
+          now.feet[side] = kw::body::rollingFoot(pose.at(kJoints[side][0]), pose.at(kJoints[side][1]), now.forward, up, foot);
+          const Eigen::Vector3d& centre = now.feet[side].centre_m;
+          const double sole = (centre.z() - ground.height(centre.head<2>())) * up.z() - foot.radius_m;  // along the normal
+          now.on_ground[side] = sole < contact_mm / 1000;
+          lowest = std::min(lowest, sole);
         }
-        auto above = [&](const Eigen::Vector3d& p) { return p.z() - ground.height(p.head<2>()); };
-        const Eigen::Vector3d &l = pose.at("l_ankle"), &r = pose.at("r_ankle");
-        const std::string foot = above(l) <= above(r) ? "l_ankle" : "r_ankle";
-        const double lowest = std::min(above(l), above(r));
-        penetration += std::max(0.0, -(lowest - ankle_height_m));
+        penetration += std::max(0.0, -lowest);
         ++penetration_count;
-        const bool on_ground = lowest - ankle_height_m < contact_mm / 1000;
-        if (previous && on_ground && foot == previous_foot)
-          skate += (pose.at(foot) - previous->at(foot)).head<2>().norm(), ++skate_count;
-        previous = on_ground ? &pose : nullptr;
-        previous_foot = foot;
+        if (frame == previous.frame + 1) {
+          // Rolling moves the centre by −R·Δφ along the walk; the rest, along the ground, is slip.
+          const Eigen::Vector3d forward = (now.forward + previous.forward).normalized();
+          double least = -1;
+          for (int side : {0, 1}) {
+            if (!now.on_ground[side] || !previous.on_ground[side]) continue;
+            Eigen::Vector3d slip = now.feet[side].centre_m - previous.feet[side].centre_m +
+                                   foot.radius_m * (now.feet[side].roll_rad - previous.feet[side].roll_rad) * forward;
+            slip -= slip.dot(up) * up;
+            if (least < 0 || slip.norm() < least) least = slip.norm();
+          }
+          if (least >= 0) skate += least, ++skate_count;
+        }
+        previous = now;
       }
       return Contact{skate_count ? 1000 * skate / skate_count : 0.0,
                      penetration_count ? 1000 * penetration / penetration_count : 0.0};

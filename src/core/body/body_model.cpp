@@ -110,4 +110,28 @@ BodyPose bodyPose(const dynamics::KinematicMap& map, const dynamics::WalkerState
   return pose;
 }
 
+FootGeometry FootGeometry::of(const dynamics::BodyProportions& proportions, double height_m) {
+  const double leg_m = proportions.leg_length_per_height * height_m;
+  FootGeometry foot;
+  foot.centre_from_knee_m = (proportions.shank.length - proportions.foot_radius) * leg_m;
+  foot.radius_m = proportions.foot_radius * leg_m;
+  foot.offset_angle_rad = proportions.foot_offset_angle;
+  foot.ankle_height_m = BodyShape::forHeight(height_m).ankle_height_m;
+  return foot;
+}
+
+RollingFoot rollingFoot(const Eigen::Vector3d& knee_m, const Eigen::Vector3d& ankle_m, const Eigen::Vector3d& forward,
+                        const Eigen::Vector3d& up, const FootGeometry& foot) {
+  // In the leg's plane the foot centre is along d(φ + e) = cos e·d(φ) + sin e·n(φ), n(φ) the
+  // in-plane normal on the forward side; turning the leg out about `forward` keeps `forward`
+  // in that plane, so n is `forward` made orthogonal to the shank.
+  const Eigen::Vector3d shank = (ankle_m - knee_m).normalized();
+  const Eigen::Vector3d normal = (forward - forward.dot(shank) * shank).normalized();
+  RollingFoot result;
+  result.centre_m = knee_m + foot.centre_from_knee_m *
+                                 (std::cos(foot.offset_angle_rad) * shank + std::sin(foot.offset_angle_rad) * normal);
+  result.roll_rad = std::atan2(shank.dot(forward), -shank.dot(up));
+  return result;
+}
+
 }  // namespace kneed_walker::core::body

@@ -191,6 +191,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   filter_options.resample_mixing = options_.resample_mixing;
   filter_options.num_threads = options_.num_threads;
   filter_options.seed = options_.seed;
+  filter_options.keep_paths = options_.keep_whole_path;
   filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(filter_options);
   frame_ = 0;
   stamp_s_ = stamp_s;
@@ -324,6 +325,12 @@ double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random)
 std::vector<body::BodyPose> Tracker::mapPoses(std::vector<int>* frames) const {
   std::vector<body::BodyPose> poses;
   for (const TrackerParticle& p : filter_->mapSequence(frames)) poses.push_back(pose(p));
+  return poses;
+}
+
+std::vector<body::BodyPose> Tracker::wholeMapPoses(std::vector<int>* frames) const {
+  std::vector<body::BodyPose> poses;
+  for (const TrackerParticle& p : filter_->wholeMapSequence(frames)) poses.push_back(pose(p));
   return poses;
 }
 

@@ -135,6 +135,8 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
 
 void TrackingSession::collectMapFrames(SessionAnswer& answer) {
   // The MAP state sequence's oldest buffered frame is final once Δs later frames weighed it.
+  // A tracker that keeps the whole path gives it all when the track ends instead.
+  if (tracker_->keepsWholePath()) return;
   std::vector<int> frames;
   const std::vector<body::BodyPose> poses = tracker_->mapPoses(&frames);
   if (frames.empty() || static_cast<int>(frames.size()) < tracker_->lagFrames() + 1) return;
@@ -148,7 +150,8 @@ std::vector<MapFrame> TrackingSession::endTrack() {
   std::vector<MapFrame> rest;
   if (tracker_->started()) {
     std::vector<int> frames;
-    const std::vector<body::BodyPose> poses = tracker_->mapPoses(&frames);
+    const std::vector<body::BodyPose> poses =
+        tracker_->keepsWholePath() ? tracker_->wholeMapPoses(&frames) : tracker_->mapPoses(&frames);
     for (size_t i = 0; i < frames.size(); ++i) {
       if (frames[i] <= map_written_) continue;
       const auto& [input, stamp] = track_inputs_.at(frames[i]);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "kneed_walker/core/optimizer/periodic_gait.h"
@@ -96,6 +97,49 @@ TEST(BodyModel, SegmentsKeepTheirLengthsUnderAnyPlacement) {
     EXPECT_NEAR(pose.forward.dot(pose.up), 0, 1e-15);
     EXPECT_NEAR(pose.left.dot(pose.forward), 0, 1e-15);
   }
+}
+
+// rollingFoot recovers each foot's centre from the knee and ankle alone (what a pose CSV holds)
+// under any heading, slope and abduction, and the rolling angle is the shank's; with hip
+// rotation of a bent knee it is approximate (measured and bounded).
+TEST(BodyModel, RollingFootIsRecoveredFromKneeAndAnkle) {
+  const dynamics::WalkerSimulator& sim = personSimulator();
+  const BodyShape shape = BodyShape::forHeight(1.75);
+  const FootGeometry foot = FootGeometry::of(dynamics::mcGeerProportions(), 1.75);
+  EXPECT_NEAR(foot.radius_m, sim.model().foot_radius, 1e-12);
+  EXPECT_DOUBLE_EQ(foot.ankle_height_m, shape.ankle_height_m);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  double worst_exact_m = 0, worst_roll_rad = 0, worst_rotated_m = 0;
+  for (int trial = 0; trial < 50; ++trial) {
+    const dynamics::WalkerState s = walkingState(0.05 * trial);
+    BodyPlacement p;
+    p.ground_origin_m = {5 * u(rng), 5 * u(rng)};
+    p.heading_rad = 3 * u(rng);
+    p.hip_abduction_rad = {0.1 * u(rng), 0.1 * u(rng)};
+    const double slope = 0.07 * u(rng);
+    const BodyPose pose = bodyPose(sim.map(), s, slope, p, shape);
+    const int stance = s.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
+    for (int side = 0; side < 2; ++side) {
+      const RollingFoot f = rollingFoot(pose.joints[kLeftKnee + side], pose.joints[kLeftAnkle + side], pose.forward, pose.up, foot);
+      worst_exact_m = std::max(worst_exact_m, (f.centre_m - pose.foot_centres[side]).norm());
+      const double shank_angle = s.q[side == stance ? dynamics::kStanceShank : dynamics::kSwingShank];
+      const double abduction = p.hip_abduction_rad[side];
+      // Turned out by θ, the shank's angle seen in the sagittal plane is atan(tan φ / cos θ).
+      worst_roll_rad = std::max(worst_roll_rad, std::abs(f.roll_rad - std::atan2(std::sin(shank_angle), std::cos(shank_angle) * std::cos(abduction))));
+    }
+    p.hip_rotation_rad = {0.1 * u(rng), 0.1 * u(rng)};
+    const BodyPose rotated = bodyPose(sim.map(), s, slope, p, shape);
+    for (int side = 0; side < 2; ++side)
+      worst_rotated_m = std::max(worst_rotated_m, (rollingFoot(rotated.joints[kLeftKnee + side], rotated.joints[kLeftAnkle + side],
+                                                               rotated.forward, rotated.up, foot).centre_m -
+                                                   rotated.foot_centres[side]).norm());
+  }
+  std::cout << "foot centre from knee and ankle: worst " << worst_exact_m << " m; with hip rotation up to 0.1 rad "
+            << worst_rotated_m * 1e3 << " mm; roll angle worst " << worst_roll_rad << " rad\n";
+  EXPECT_LT(worst_exact_m, 1e-12);
+  EXPECT_LT(worst_roll_rad, 1e-12);
+  EXPECT_LT(worst_rotated_m, 0.02);  // measured 8.7 mm: the shank turned about the thigh moves the offset foot
 }
 
 TEST(BodyModel, StanceFootRestsOnASlopedGround) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <cmath>
 #include <random>
 #include <vector>
@@ -161,6 +163,64 @@ TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
     ASSERT_EQ(sequence[s].visited.size(), static_cast<size_t>(frames[s] + 1));
     for (size_t k = 0; k < sequence[s].visited.size(); ++k) EXPECT_EQ(sequence[s].visited[k], best.visited[k]);
   }
+}
+
+// With keep_paths the whole MAP sequence is the best particle's own history from the first
+// frame, and the kept genealogy holds only lineages that still have descendants: after
+// resampling they coalesce, so it stays far below frames × N.
+TEST(ParticleFilter, WholeMapSequenceIsTheBestParticlesHistoryAndPrunes) {
+  struct History {
+    std::vector<int> visited;
+  };
+  FilterOptions options;
+  options.num_particles = 200;
+  options.resample_ess_threshold = 150;
+  options.resample_lag_frames = 3;
+  options.keep_paths = true;
+  ParticleFilter<History> filter(options);
+  auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
+  auto propagate = [&](History& h, int frame, common::Random& random) {
+    h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
+    return likelihood(h, frame);
+  };
+  filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
+                    likelihood, 0);
+  constexpr int kFrames = 60;
+  int resamplings = 0;
+  for (int t = 1; t <= kFrames; ++t) resamplings += filter.step(propagate, t).resampled;
+  EXPECT_GT(resamplings, 10);
+  std::vector<int> frames;
+  const std::vector<History> sequence = filter.wholeMapSequence(&frames);
+  ASSERT_EQ(sequence.size(), static_cast<size_t>(kFrames + 1));
+  const History& best = filter.states()[filter.best()];
+  for (size_t s = 0; s < sequence.size(); ++s) {
+    ASSERT_EQ(frames[s], static_cast<int>(s));
+    ASSERT_EQ(sequence[s].visited.size(), s + 1);
+    EXPECT_EQ(sequence[s].visited.back(), best.visited[s]) << "frame " << s;
+  }
+  const std::size_t kept = filter.keptPathStates();
+  std::cout << "kept " << kept << " states for " << kFrames - options.resample_lag_frames << " retired frames of "
+            << options.num_particles << " particles\n";
+  EXPECT_GE(kept, static_cast<size_t>(options.num_particles));  // the newest retired generation
+  EXPECT_LT(kept, static_cast<size_t>(6 * options.num_particles));  // measured 3.6 N
+  EXPECT_THROW(ParticleFilter<History>(FilterOptions{}).wholeMapSequence(), std::logic_error);
+}
+
+// The tree on its own: paths, pruning of dead lineages, reuse of freed nodes.
+TEST(AncestryTree, KeepsOnlyLineagesWithDescendants) {
+  AncestryTree<int> tree;
+  tree.addGeneration(0, {10, 11, 12}, {-1, -1, -1});
+  tree.addGeneration(1, {20, 21, 22}, {0, 0, 2});  // 11 has no child: released
+  EXPECT_EQ(tree.liveNodes(), 5u);
+  tree.addGeneration(2, {30, 31, 32}, {1, 1, 1});  // all from 21: 10, 12, 20, 22 released
+  EXPECT_EQ(tree.liveNodes(), 5u);                  // 10, 21, 30, 31, 32
+  std::vector<int> frames;
+  EXPECT_EQ(tree.path(2, &frames), (std::vector<int>{10, 21, 32}));
+  EXPECT_EQ(frames, (std::vector<int>{0, 1, 2}));
+  tree.addGeneration(3, {40, 41, 42}, {-1, 0, 2});  // a new root beside two lineages
+  EXPECT_EQ(tree.path(0), (std::vector<int>{40}));
+  EXPECT_EQ(tree.path(2), (std::vector<int>{10, 21, 32, 42}));
+  EXPECT_EQ(tree.liveNodes(), 7u);
 }
 
 TEST(ParticleFilter, LogSumExpIsStable) {

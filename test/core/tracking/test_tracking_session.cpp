@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -16,10 +18,11 @@ const test::RenderedWalk& scene() {
   return walk;
 }
 
-std::unique_ptr<Tracker> makeTracker(int particles) {
+std::unique_ptr<Tracker> makeTracker(int particles, bool keep_whole_path = false) {
   const test::RenderedWalk& s = scene();
   TrackerOptions options;
   options.num_particles = particles;
+  options.keep_whole_path = keep_whole_path;
   options.resample_ess_threshold = particles / 10.0;
   return std::make_unique<Tracker>(
       s.camera, s.walk.ground, gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
@@ -107,6 +110,59 @@ TEST(TrackingSession, GivesEveryTrackedFrameOneMapFrame) {
   std::sort(mapped.begin(), mapped.end());
   EXPECT_EQ(mapped, estimated);
   EXPECT_FALSE(session.tracker().started());
+}
+
+// Mean slip of the planted foot between frames (as evaluate's footskate): a foot on the ground
+// in both frames moves only by rolling (−R Δφ along the walk) unless it slips.
+double meanSlipM(const std::vector<MapFrame>& frames) {
+  const body::FootGeometry foot = body::FootGeometry::of(test::shippedWalkerModel(), 1.75);
+  double sum = 0;
+  int pairs = 0;
+  for (size_t i = 1; i < frames.size(); ++i) {
+    const body::BodyPose &a = frames[i - 1].pose, &b = frames[i].pose;
+    double least = -1;
+    for (int side : {0, 1}) {
+      const body::RollingFoot fa = body::rollingFoot(a.joints[body::kLeftKnee + side], a.joints[body::kLeftAnkle + side], a.forward, a.up, foot);
+      const body::RollingFoot fb = body::rollingFoot(b.joints[body::kLeftKnee + side], b.joints[body::kLeftAnkle + side], b.forward, b.up, foot);
+      if (fa.centre_m.z() - foot.radius_m > 0.005 || fb.centre_m.z() - foot.radius_m > 0.005) continue;  // level ground Z = 0
+      Eigen::Vector3d slip = fb.centre_m - fa.centre_m + foot.radius_m * (fb.roll_rad - fa.roll_rad) * b.forward;
+      slip.z() = 0;
+      if (least < 0 || slip.norm() < least) least = slip.norm();
+    }
+    if (least >= 0) sum += least, ++pairs;
+  }
+  return pairs ? sum / pairs : 0.0;
+}
+
+// Keeping the whole path, the session gives the track's MAP frames all at its end: one per
+// tracked frame, in order, and one particle's path, whose planted foot rolls without slipping
+// as the prior moves it; the frame-by-frame lagged output of the same run switches between
+// particles' ancestries, and its feet slip.
+TEST(TrackingSession, KeepingTheWholePathGivesOneParticlesPathAtTheEnd) {
+  TrackingSession whole(makeTracker(200, true), holding(10)), lagged(makeTracker(200), holding(10));
+  whole.startFromBox(truthBox());
+  lagged.startFromBox(truthBox());
+  std::vector<int> estimated;
+  for (const SessionAnswer& a : run(whole)) {
+    if (a.estimate) estimated.push_back(a.input);
+    EXPECT_TRUE(a.map_frames.empty()) << "frame " << a.input << ": MAP frames before the track ended";
+  }
+  const std::vector<MapFrame> path = whole.finish();
+  std::vector<int> mapped;
+  for (const MapFrame& m : path) mapped.push_back(m.input);
+  EXPECT_EQ(mapped, estimated);
+  ASSERT_GT(path.size(), 10u);
+  // Same seed and frames: the filter ran identically; only which states are output differs.
+  std::vector<MapFrame> lagged_path;
+  for (const SessionAnswer& a : run(lagged))
+    for (const MapFrame& m : a.map_frames) lagged_path.push_back(m);
+  for (const MapFrame& m : lagged.finish()) lagged_path.push_back(m);
+  ASSERT_EQ(lagged_path.size(), path.size());
+  EXPECT_EQ(path.back().pose.joints[body::kWaist], lagged_path.back().pose.joints[body::kWaist]);
+  std::cout << "mean slip of the planted foot: whole path " << 1e3 * meanSlipM(path) << " mm, lagged "
+            << 1e3 * meanSlipM(lagged_path) << " mm\n";
+  EXPECT_LT(meanSlipM(path), 0.002);
+  EXPECT_GT(meanSlipM(lagged_path), 2 * meanSlipM(path));
 }
 
 // A box around no person cannot start a track: the frame is answered (waiting, saying why),

@@ -93,4 +93,25 @@ BodyPose bodyPose(const dynamics::KinematicMap& map, const dynamics::WalkerState
                   double ground_slope, const BodyPlacement& placement, const BodyShape& shape,
                   double metres_per_model_length = 1.0);
 
+// A leg's rolling foot recovered from its knee and ankle, as a pose CSV gives them (the inverse
+// of bodyPose's leg, for measuring contact: evaluate's foot skate and ground penetration).
+// The foot's centre lies (ℓS − R)·L from the knee, turned from the shank's axis by the foot's
+// offset angle e towards `forward` (walker_kinematics.h); `roll_rad` is the shank's angle from
+// the ground normal, the angle the foot has rolled through. Exact for a leg turned out
+// (abduction); with hip rotation of a bent knee, approximate.
+struct FootGeometry {
+  double centre_from_knee_m = 0;  // (ℓS − R)·L
+  double radius_m = 0;            // R·L
+  double offset_angle_rad = 0;    // e
+  double ankle_height_m = 0;      // the ankle above the sole, BodyShape's
+  static FootGeometry of(const dynamics::BodyProportions& proportions, double height_m);
+};
+struct RollingFoot {
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+  double roll_rad = 0;
+};
+// `forward` and `up` are the pose's unit walking direction along the ground and ground normal.
+RollingFoot rollingFoot(const Eigen::Vector3d& knee_m, const Eigen::Vector3d& ankle_m, const Eigen::Vector3d& forward,
+                        const Eigen::Vector3d& up, const FootGeometry& foot);
+
 }  // namespace kneed_walker::core::body

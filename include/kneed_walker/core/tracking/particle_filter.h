@@ -13,6 +13,11 @@
 // particle's ancestry through the buffer is kept, so that the MAP state sequence (the ancestry
 // of the best particle) is available, not only a per-frame mean.
 //
+// With FilterOptions::keep_paths the ancestry is kept beyond the buffer too, back to the first
+// frame (AncestryTree: only lineages that still have descendants), so that the whole MAP state
+// sequence of a track can be had at its end: one particle's path, which the prior made, where
+// the sequence of each frame's lagged MAP state jumps between particles.
+//
 // Deterministic for a seed on any number of threads: particles are processed in fixed chunks of
 // kChunk, each with its own generator seeded from (seed, frame, pass, chunk).
 #pragma once
@@ -41,6 +46,78 @@ struct FilterOptions {
   double resample_mixing = 0.95;          // γ: weight of the time-t weights in the proposal
   int num_threads = 0;                    // 0: all cores
   std::uint64_t seed = 1;
+  bool keep_paths = false;                // keep the ancestry back to the first frame (wholeMapSequence)
+};
+
+// The genealogy of a particle system, generation by generation, pruned as it grows: a node is
+// kept while it is in the newest generation or has a kept child, so that it holds only the
+// lineages of the newest generation (after resampling they coalesce within a few generations;
+// Jacob, Murray & Rubenthaler, "Path storage in the particle filter", 2015). Nodes live in one
+// pool whose freed slots are reused: no allocation once the pool has grown to its largest size.
+template <class Payload>
+class AncestryTree {
+ public:
+  void clear() {
+    nodes_.clear();
+    free_.clear();
+    newest_.clear();
+  }
+  bool empty() const { return newest_.empty(); }
+
+  // Adds a generation: payloads[i] at `frame` is a child of the newest generation's parents[i]
+  // (−1: a root). Then every node left without descendants in it is released.
+  void addGeneration(int frame, const std::vector<Payload>& payloads, const std::vector<int>& parents) {
+    std::vector<int> generation(payloads.size());
+    for (std::size_t i = 0; i < payloads.size(); ++i) {
+      const int parent = parents[i] >= 0 && !newest_.empty() ? newest_.at(parents[i]) : -1;
+      int id;
+      if (free_.empty()) {
+        id = static_cast<int>(nodes_.size());
+        nodes_.push_back({payloads[i], frame, parent, 1});
+      } else {
+        id = free_.back();
+        free_.pop_back();
+        nodes_[id] = {payloads[i], frame, parent, 1};
+      }
+      if (parent >= 0) ++nodes_[parent].references;
+      generation[i] = id;
+    }
+    for (int id : newest_) release(id);
+    newest_ = std::move(generation);
+  }
+
+  // The path that ends at the newest generation's particle `index`, oldest first.
+  std::vector<Payload> path(int index, std::vector<int>* frames = nullptr) const {
+    std::vector<Payload> payloads;
+    std::vector<int> path_frames;
+    for (int id = newest_.at(index); id >= 0; id = nodes_[id].parent) {
+      payloads.push_back(nodes_[id].payload);
+      path_frames.push_back(nodes_[id].frame);
+    }
+    std::reverse(payloads.begin(), payloads.end());
+    std::reverse(path_frames.begin(), path_frames.end());
+    if (frames) *frames = std::move(path_frames);
+    return payloads;
+  }
+
+  std::size_t liveNodes() const { return nodes_.size() - free_.size(); }
+
+ private:
+  struct Node {
+    Payload payload;
+    int frame = 0;
+    int parent = -1;     // −1: a root
+    int references = 0;  // kept children, plus 1 while in the newest generation
+  };
+  void release(int id) {  // iterative: a released chain may be long
+    while (id >= 0 && --nodes_[id].references == 0) {
+      free_.push_back(id);
+      id = nodes_[id].parent;
+    }
+  }
+  std::vector<Node> nodes_;
+  std::vector<int> free_;
+  std::vector<int> newest_;  // node of each particle of the newest generation
 };
 
 // What one step did.
@@ -79,6 +156,7 @@ class ParticleFilter {
   FilterStepReport initialize(const std::function<State(common::Random&)>& sample,
                               const Weigh& weigh, int frame) {
     sets_.clear();
+    retired_.clear();
     Set set;
     set.frame = frame;
     set.states.resize(options_.num_particles);
@@ -115,7 +193,11 @@ class ParticleFilter {
     report.max_log_likelihood = *std::max_element(likelihoods.begin(), likelihoods.end());
     normalise(set.log_weights);
     sets_.push_back(std::move(set));
-    while (static_cast<int>(sets_.size()) > options_.resample_lag_frames + 1) sets_.pop_front();
+    while (static_cast<int>(sets_.size()) > options_.resample_lag_frames + 1) {
+      // The oldest set is final: resampling only rewrites the buffered frames after it.
+      if (options_.keep_paths) retired_.addGeneration(sets_.front().frame, sets_.front().states, sets_.front().ancestors);
+      sets_.pop_front();
+    }
     report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
     if (report.ess_before_resampling < options_.resample_ess_threshold) {
       const auto started = std::chrono::steady_clock::now();
@@ -149,6 +231,22 @@ class ParticleFilter {
     }
     return sequence;
   }
+  // With keep_paths: the MAP state sequence from the first frame, oldest first: the whole
+  // ancestry of the best particle at the newest frame. `frames` receives their frame numbers.
+  std::vector<State> wholeMapSequence(std::vector<int>* frames = nullptr) const {
+    if (!options_.keep_paths) throw std::logic_error("wholeMapSequence needs FilterOptions::keep_paths");
+    std::vector<int> buffered_frames;
+    std::vector<State> buffered = mapSequence(&buffered_frames);
+    int oldest_ancestor = best();  // becomes the index into the newest retired generation (−1: none)
+    for (int s = static_cast<int>(sets_.size()) - 1; s >= 0; --s) oldest_ancestor = sets_[s].ancestors[oldest_ancestor];
+    std::vector<State> sequence;
+    if (oldest_ancestor >= 0 && !retired_.empty()) sequence = retired_.path(oldest_ancestor, frames);
+    else if (frames) frames->clear();
+    sequence.insert(sequence.end(), buffered.begin(), buffered.end());
+    if (frames) frames->insert(frames->end(), buffered_frames.begin(), buffered_frames.end());
+    return sequence;
+  }
+  std::size_t keptPathStates() const { return retired_.liveNodes(); }  // states kept beyond the buffer
   const FilterOptions& options() const { return options_; }
 
   static double effectiveSampleSize(const std::vector<double>& normalised_log_weights) {
@@ -264,6 +362,7 @@ class ParticleFilter {
 
   FilterOptions options_;
   std::deque<Set> sets_;  // the last Δs + 1 frames, oldest first
+  AncestryTree<State> retired_;  // with keep_paths: the lineages of the frames before the buffer
 };
 
 }  // namespace kneed_walker::core::tracking

@@ -113,6 +113,9 @@ class Tracker {
   const std::vector<double>& logWeights() const { return filter_->logWeights(); }
   // The MAP state sequence over the buffered frames (oldest first) as body poses, and their frames.
   std::vector<body::BodyPose> mapPoses(std::vector<int>* frames) const;
+  // With TrackerOptions::keep_whole_path: the MAP state sequence from the track's first frame.
+  std::vector<body::BodyPose> wholeMapPoses(std::vector<int>* frames) const;
+  bool keepsWholePath() const { return options_.keep_whole_path; }
   const TrackerTiming& timing() const { return timing_; }
   int gaitCount() const { return static_cast<int>(bank_.size()); }
   // The pose of a particle (world, metres).

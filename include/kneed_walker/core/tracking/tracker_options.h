@@ -31,6 +31,12 @@ struct TrackerOptions {
   // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
   double default_frame_interval_s = 0.1;  // s, (0, 1]
   double max_frame_gap_s = 1.0;           // s, > default_frame_interval_s
+
+  // Output. Online, each frame's MAP state is final Δs frames later (the best particle's
+  // ancestry through the buffer); consecutive frames may come from different particles. Offline,
+  // keep_whole_path keeps every lineage back to the track's start, so that the track's whole MAP
+  // state sequence (one particle's path: no foot skate) can be had at its end.
+  bool keep_whole_path = false;
 };
 
 // Every problem with the options, each naming the field and the allowed range; empty when

@@ -59,7 +59,7 @@ struct SessionAnswer {
   bool start_failed = false;              // a given guess or box could not start a track (message says why)
   std::optional<TrackEstimate> estimate;  // this frame's filtered estimate (kTracking, kLost)
   // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
-  // of a track when it ends.
+  // of a track when it ends (a tracker that keeps the whole path: all of the track when it ends).
   std::vector<MapFrame> map_frames;
   std::string message;  // what happened, for people (why waiting, lost, started)
 };
