@@ -134,16 +134,12 @@ TEST(ParticleFilter, SameSeedSameParticlesOnAnyNumberOfThreads) {
   EXPECT_NE(run(model, options).final_states, one.final_states);
 }
 
-TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
-  // States carry their own history: the MAP sequence must be consistent with it.
-  struct History {
-    std::vector<int> visited;
-  };
-  FilterOptions options;
-  options.num_particles = 200;
-  options.resample_ess_threshold = 150;
-  options.resample_lag_frames = 3;
-  ParticleFilter<History> filter(options);
+// States that carry their own history, in a filter of 200 particles stepped through `frames`
+// frames: the MAP sequences must be consistent with it. Returns the number of resamplings.
+struct History {
+  std::vector<int> visited;
+};
+int runHistoryFilter(ParticleFilter<History>& filter, int frames) {
   auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
   auto propagate = [&](History& h, int frame, common::Random& random) {
     h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
@@ -152,8 +148,21 @@ TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
   filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
                     likelihood, 0);
   int resamplings = 0;
-  for (int t = 1; t <= 12; ++t) resamplings += filter.step(propagate, t).resampled;
-  EXPECT_GT(resamplings, 0);
+  for (int t = 1; t <= frames; ++t) resamplings += filter.step(propagate, t).resampled;
+  return resamplings;
+}
+FilterOptions historyOptions(bool keep_paths) {
+  FilterOptions options;
+  options.num_particles = 200;
+  options.resample_ess_threshold = 150;
+  options.resample_lag_frames = 3;
+  options.keep_paths = keep_paths;
+  return options;
+}
+
+TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
+  ParticleFilter<History> filter(historyOptions(false));
+  EXPECT_GT(runHistoryFilter(filter, 12), 0);
   std::vector<int> frames;
   const std::vector<History> sequence = filter.mapSequence(&frames);
   ASSERT_EQ(sequence.size(), 4u);
@@ -169,26 +178,10 @@ TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
 // frame, and the kept genealogy holds only lineages that still have descendants: after
 // resampling they coalesce, so it stays far below frames × N.
 TEST(ParticleFilter, WholeMapSequenceIsTheBestParticlesHistoryAndPrunes) {
-  struct History {
-    std::vector<int> visited;
-  };
-  FilterOptions options;
-  options.num_particles = 200;
-  options.resample_ess_threshold = 150;
-  options.resample_lag_frames = 3;
-  options.keep_paths = true;
+  const FilterOptions options = historyOptions(true);
   ParticleFilter<History> filter(options);
-  auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
-  auto propagate = [&](History& h, int frame, common::Random& random) {
-    h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
-    return likelihood(h, frame);
-  };
-  filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
-                    likelihood, 0);
   constexpr int kFrames = 60;
-  int resamplings = 0;
-  for (int t = 1; t <= kFrames; ++t) resamplings += filter.step(propagate, t).resampled;
-  EXPECT_GT(resamplings, 10);
+  EXPECT_GT(runHistoryFilter(filter, kFrames), 10);
   std::vector<int> frames;
   const std::vector<History> sequence = filter.wholeMapSequence(&frames);
   ASSERT_EQ(sequence.size(), static_cast<size_t>(kFrames + 1));
