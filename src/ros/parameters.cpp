@@ -121,6 +121,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
 
   core::tracking::TrackerOptions& t = config.tracker;
   reader.read("num_particles", t.num_particles);
+  // Unset, the threshold follows the particle count (the paper's 500 of 5000).
+  t.resample_ess_threshold = t.num_particles / 10.0;
   reader.read("resample_ess_threshold", t.resample_ess_threshold);
   reader.read("resample_lag_frames", t.resample_lag_frames);
   reader.read("resample_mixing", t.resample_mixing);

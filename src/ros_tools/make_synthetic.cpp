@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -129,14 +130,22 @@ double meanStepLength(const kw::synthetic::SyntheticWalk& walk) {
   return strikes.size() < 2 ? 0.0 : (strikes.back() - strikes.front()).norm() / static_cast<double>(strikes.size() - 1);
 }
 
-int run(const Settings& s) {
+// Writes the sequence; `outputs` receives the files it creates, so that a failure can remove them.
+int run(const Settings& s, std::vector<std::string>& outputs) {
   const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
   kw::synthetic::SyntheticWalkOptions options = s.walk;
   const Eigen::Vector2d start_pixel = s.start_pixel.size() == 2
                                           ? Eigen::Vector2d(s.start_pixel[0], s.start_pixel[1])
                                           : Eigen::Vector2d(0.75 * camera.width(), 0.85 * camera.height());
+  if (!(start_pixel.x() >= 0 && start_pixel.x() < camera.width() && start_pixel.y() >= 0 &&
+        start_pixel.y() < camera.height())) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--start-pixel (%g, %g) lies outside the camera's %dx%d image", start_pixel.x(),
+                  start_pixel.y(), camera.width(), camera.height());
+    throw std::runtime_error(text);
+  }
   const auto start = camera.groundPoint(start_pixel);
-  if (!start) throw std::runtime_error("--start-pixel does not see the ground");
+  if (!start) throw std::runtime_error("--start-pixel does not see the ground (it is above the horizon)");
   options.start_m = start->head<2>();
   if (!s.heading_given) {  // across the camera's line of sight, towards the image's left
     const Eigen::Vector2d from_camera = options.start_m - camera.centre().head<2>();
@@ -157,7 +166,15 @@ int run(const Settings& s) {
   const kw::synthetic::Occluder occluder = kw::synthetic::crossingOccluder(
       camera, middle.pose.joints[kw::body::kWaist], middle.time_s, middle.pose.forward.head<2>());
 
+  double smallest_px = 1e9, largest_px = 0;
+  for (const kw::synthetic::SyntheticFrame& frame : walk.frames) {
+    const double px = pixelHeight(camera, frame.pose, options.person_height_m);
+    smallest_px = std::min(smallest_px, px);
+    largest_px = std::max(largest_px, px);
+  }
+
   const std::string stem = s.out_dir + "/" + s.name;
+  outputs = {stem + ".bag", stem + "_ground_truth.csv", stem + ".avi", stem + "_camera.yml"};
   rosbag::Bag bag(stem + ".bag", rosbag::bagmode::Write);
   std::ofstream csv(stem + "_ground_truth.csv");
   if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write");
@@ -184,7 +201,6 @@ int run(const Settings& s) {
     bag.write("/tf_static", first_stamp, tf, latched);
   }
   sensor_msgs::CameraInfo info = kneed_walker::ros_glue::toCameraInfo(camera, camera_frame);
-  double smallest_px = 1e9, largest_px = 0;
   for (size_t i = 0; i < walk.frames.size(); ++i) {
     const kw::synthetic::SyntheticFrame& frame = walk.frames[i];
     cv::Mat image = scene.clone();
@@ -206,11 +222,10 @@ int run(const Settings& s) {
       csv << i << ',' << std::setprecision(6) << stamp.toSec() << ',' << kw::body::jointName(kw::body::BodyJoint(j)) << ','
           << std::setprecision(6) << p.x() << ',' << p.y() << ',' << p.z() << '\n';
     }
-    const double px = pixelHeight(camera, frame.pose, options.person_height_m);
-    smallest_px = std::min(smallest_px, px);
-    largest_px = std::max(largest_px, px);
   }
   bag.close();
+  csv.close();
+  if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write (disk full?)");
   if (s.norms.empty())
     std::printf("make_synthetic: %zu frames at %.1f fps, %.2f km/h, %.2f m steps, slope %.3f rad, seed %llu "
                 "(%d prior sample%s)\n",
@@ -228,11 +243,44 @@ int run(const Settings& s) {
   return 0;
 }
 
+// Paths read from the --config file are relative to that file (the command line's to the
+// working directory); every input file must then exist. Returns the problem, naming the option.
+std::string resolveFiles(const CLI::App& app, int argc, char** argv, Settings& s) {
+  const std::string config = app.get_option("--config")->as<std::string>();
+  std::error_code error;  // the file's real directory: a config reached through a link resolves from where it is
+  const std::string config_dir =
+      config.empty() ? "" : std::filesystem::canonical(config, error).parent_path().string();
+  auto on_command_line = [&](const std::string& option) {
+    for (int i = 1; i < argc; ++i)
+      if (argv[i] == option || std::string(argv[i]).rfind(option + "=", 0) == 0) return true;
+    return false;
+  };
+  struct PathOption {
+    const char* name;
+    std::string* value;
+  };
+  const bool video_background = s.background != "textured";
+  for (const PathOption& o : {PathOption{"--camera", &s.camera_path}, PathOption{"--background", &s.background},
+                              PathOption{"--norms", &s.norms}, PathOption{"--table", &s.table},
+                              PathOption{"--prior", &s.prior}, PathOption{"--walker-model", &s.walker_model}}) {
+    if (o.value->empty() || (o.value == &s.background && !video_background)) continue;
+    if (app.count(o.name) > 0 && !on_command_line(o.name) && !config_dir.empty() &&
+        std::filesystem::path(*o.value).is_relative())
+      *o.value = (std::filesystem::path(config_dir) / *o.value).lexically_normal().string();
+    if (!std::filesystem::is_regular_file(*o.value))
+      return std::string(o.name) + ": " + *o.value + " is not a readable file" +
+             (app.count(o.name) > 0 && !on_command_line(o.name) ? " (from " + config + ")" : "");
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Renders a synthetic walking sequence with ground truth (bag, CSV, calibration, video)."};
-  app.set_config("--config", "", "read these options from an INI/TOML file (command line wins)");
+  app.set_config("--config", "", "read these options from an INI/TOML file (command line wins; relative paths in "
+                 "it are relative to the file)");
+  app.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key is an error, not ignored
   Settings s;
   const std::string share = ros::package::getPath("kneed_walker");
   s.table = share + "/config/prior_gait_table.yaml";
@@ -242,17 +290,17 @@ int main(int argc, char** argv) {
   app.add_option("--out-dir", s.out_dir, "directory to write into (must exist)")->required()->check(CLI::ExistingDirectory);
   app.add_option("--name", s.name, "file name stem of the outputs")->capture_default_str();
   app.add_option("--camera", s.camera_path, "calibration (OpenCV YAML: camera_matrix, distortion_coefficients, R, t)")
-      ->required()->check(CLI::ExistingFile);
+      ->required();
   app.add_option("--camera-unit", s.camera_unit_m, "metres per length unit of the calibration's t")->capture_default_str()
       ->check(kneed_walker::tools::FiniteRange(1e-6, 1e3));
   app.add_option("--background", s.background,
                  "'textured' (a paved ground plane), an image, or a video whose median frame is the empty scene")->capture_default_str();
   app.add_option("--background-samples", s.background_samples, "frames of the video in the median")->capture_default_str()
       ->check(CLI::Range(1, 1000));
-  app.add_option("--table", s.table, "gait table the prior walks around")->capture_default_str()->check(CLI::ExistingFile);
-  app.add_option("--prior", s.prior, "prior parameters")->capture_default_str()->check(CLI::ExistingFile);
+  app.add_option("--table", s.table, "gait table the prior walks around")->capture_default_str();
+  app.add_option("--prior", s.prior, "prior parameters")->capture_default_str();
   app.add_option("--walker-model", s.walker_model, "body proportions; the table must be made for them")
-      ->capture_default_str()->check(CLI::ExistingFile);
+      ->capture_default_str();
   app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 20));
   auto* step = app.add_option("--step", w.step_length_m, "step length, m (not with --norms: the norms set it)")
                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
@@ -260,7 +308,7 @@ int main(int argc, char** argv) {
                     ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
   app.add_option("--norms", s.norms,
                  "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
-                 "prior did not make")->check(CLI::ExistingFile)->excludes(step)->excludes(slope);
+                 "prior did not make")->excludes(step)->excludes(slope);
   app.add_option("--end-speed", s.end_speed_kmh,
                  "with --norms: the speed at the end, km/h; the speed changes linearly from --speed (default: --speed)")
       ->check(kneed_walker::tools::FiniteRange(0.5, 10));
@@ -283,6 +331,10 @@ int main(int argc, char** argv) {
   app.add_option("--start-stamp", s.start_stamp_s, "stamp of the first frame, s since the epoch")->capture_default_str()
       ->check(kneed_walker::tools::FiniteRange(1e-3, 4e9));
   CLI11_PARSE(app, argc, argv);
+  if (const std::string problem = resolveFiles(app, argc, argv, s); !problem.empty()) {
+    std::fprintf(stderr, "make_synthetic: %s\n", problem.c_str());
+    return 2;
+  }
   s.heading_given = app.count("--heading") > 0;
   if (s.heading_given && app.count("--oblique") > 0) {
     std::fprintf(stderr, "make_synthetic: --oblique turns the default heading; give it or --heading, not both\n");
@@ -292,10 +344,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "make_synthetic: --end-speed needs --norms (the prior walks at one speed)\n");
     return 2;
   }
+  std::vector<std::string> outputs;
   try {
     ros::Time::init();
-    return run(s);
+    return run(s, outputs);
   } catch (const std::exception& e) {
+    for (const std::string& path : outputs) std::remove(path.c_str());  // no partial sequence is left behind
     std::fprintf(stderr, "make_synthetic: %s\n", e.what());
     return 1;
   }

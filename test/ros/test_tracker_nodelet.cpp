@@ -188,6 +188,22 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
     EXPECT_NE(what.find("/bad_parameters/num_particles = -5 is outside"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/person_mass_kg must be a number"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/num_partcles is not a parameter"), std::string::npos) << what;
+    EXPECT_EQ(what.find("resample_ess_threshold ="), std::string::npos) << "a bad count is reported once: " << what;
+  }
+}
+
+// Setting only the particle count works: the resampling threshold follows it (N / 10); one
+// set above the count is refused saying how to fix it.
+TEST(TrackerNodelet, TheResamplingThresholdFollowsTheParticleCount) {
+  ros::NodeHandle few("/few_particles");
+  few.setParam("num_particles", 100);
+  EXPECT_DOUBLE_EQ(loadTrackerNodeConfig(few).tracker.resample_ess_threshold, 10.0);
+  few.setParam("resample_ess_threshold", 500.0);
+  try {
+    loadTrackerNodeConfig(few);
+    FAIL() << "a threshold above the particle count was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("leave it out for num_particles / 10"), std::string::npos) << e.what();
   }
 }
 

@@ -3,6 +3,7 @@
 #include "kneed_walker/core/common/config_file.h"
 #include "kneed_walker/core/prior/body_prior.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -57,6 +58,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
 
   common::Random random(o.seed);
   std::uniform_real_distribution<double> phase(0.0, 1.0);
+  double longest_s = 0;  // walked before falling, over the samples
   for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
     SyntheticFrame frame;
     prior::BodyParticle particle = prior.sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
@@ -66,6 +68,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
     bool fell = false;
     for (int i = 0; i < frame_count && !fell; ++i) {
       if (i > 0) fell = prior.transition(particle, frame_s, random, frame.pose).fell;
+      if (fell) longest_s = std::max(longest_s, (i - 1) * frame_s);
       frame.time_s = i * frame_s;
       frame.walker = particle.walker.walker;
       frame.placement = particle.placement.value;
@@ -74,8 +77,10 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
     if (!fell) return walk;
   }
   std::ostringstream message;
-  message << "synthetic walk: the prior fell in all " << o.max_attempts
-          << " samples; try a gait nearer the table's or lower prior noise";
+  message << "synthetic walk: all " << o.max_attempts << " samples of the prior fell within the " << o.duration_s
+          << " s asked (the longest walked " << longest_s
+          << " s): a chain of sampled strides falls sooner or later (at the default gait most within about 16 s), "
+             "so make shorter walks, or walk nearer a table gait, or with less prior noise";
   throw std::runtime_error(message.str());
 }
 

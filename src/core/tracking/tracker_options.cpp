@@ -23,13 +23,15 @@ void checkRange(std::vector<std::string>& problems, const char* name, T value, T
 std::vector<std::string> validate(const TrackerOptions& o) {
   std::vector<std::string> problems;
   checkRange(problems, "num_particles", o.num_particles, 1, 1000000, "particle count");
-  checkRange(problems, "resample_ess_threshold", o.resample_ess_threshold, 1e-9,
-             static_cast<double>(o.num_particles),
-             "effective sample size below which to resample; at most num_particles");
+  if (o.num_particles >= 1)  // a bad particle count is reported by itself, not as this range's end
+    checkRange(problems, "resample_ess_threshold", o.resample_ess_threshold, 1e-9,
+               static_cast<double>(o.num_particles),
+               "effective sample size below which to resample; at most num_particles: lower it, or leave it "
+               "out for num_particles / 10");
   checkRange(problems, "resample_lag_frames", o.resample_lag_frames, 0, 30,
              "frames back to resample from (paper's Δs)");
   checkRange(problems, "resample_mixing", o.resample_mixing, 0.0, 1.0,
-             "weight of the current-time multinomial (paper's π)");
+             "weight of the current-time weights in the resampling proposal, the paper's gamma");
   checkRange(problems, "num_threads", o.num_threads, 0, 256, "worker threads; 0 = all cores");
   checkRange(problems, "person_height_m", o.person_height_m, 1.0, 2.3, "standing height, m");
   checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");

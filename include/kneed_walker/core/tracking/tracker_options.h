@@ -16,7 +16,7 @@ struct TrackerOptions {
   int num_particles = 5000;               // N, count, [1, 1000000]
   double resample_ess_threshold = 500.0;  // resample when N_eff falls below this, (0, N]
   int resample_lag_frames = 3;            // Δs: resample from time t − Δs, frames, [0, 30]
-  double resample_mixing = 0.95;          // π: weight of the time-t multinomial, [0, 1]
+  double resample_mixing = 0.95;          // γ: weight of the time-t weights in the resampling proposal, [0, 1]
 
   // Execution.
   int num_threads = 0;        // worker threads for the per-particle work; 0 = all cores
