@@ -18,6 +18,7 @@
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/vision/body_projection.h"
 #include "kneed_walker/core/synthetic/synthetic_walk.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
@@ -32,7 +33,8 @@ int main(int argc, char** argv) {
   double camera_unit_m = 0.001;
   int particles = 5000, repeats = 15;
   app.add_option("--camera", camera_path, "calibration (OpenCV YAML)")->required()->check(CLI::ExistingFile);
-  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str();
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(1e-6, 1e3));
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions; the table must be made for them")

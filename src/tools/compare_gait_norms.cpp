@@ -19,6 +19,7 @@
 
 #include "kneed_walker/core/gait/gait_norms.h"
 #include "kneed_walker/core/gait/gait_table.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
@@ -43,8 +44,7 @@ std::array<double, 3> leftLegAngles(const kw::dynamics::WalkerState& s, double s
 
 int main(int argc, char** argv) {
   CLI::App app{"Compares a gait's joint angles with the Schwartz 2008 norms."};
-  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), norms_path,
-              out = "gait_vs_norms.png";
+  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), norms_path, out;
   std::string speed_class = "Free";
   double speed_kmh = 4.5, step_m = 0.7;
   app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
@@ -52,9 +52,11 @@ int main(int argc, char** argv) {
   app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
       ->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--norms", norms_path, "Schwartz2008_Joint_Rotations.csv")->required()->check(CLI::ExistingFile);
-  app.add_option("--out", out, "plot to write (PNG)");
-  app.add_option("--speed", speed_kmh, "walking speed of the gait, km/h");
-  app.add_option("--step", step_m, "step length of the gait, m");
+  app.add_option("--out", out, "plot to write (PNG)")->required();
+  app.add_option("--speed", speed_kmh, "walking speed of the gait, km/h")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--step", step_m, "step length of the gait, m")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(0.1, 3));
   app.add_option("--speed-class", speed_class, "norms' speed class (Very Slow, Slow, Free, Fast, Very Fast)");
   CLI11_PARSE(app, argc, argv);
 

@@ -12,22 +12,24 @@
 
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/dynamics/walker_drawing.h"
+#include "options.h"
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
 
 int main(int argc, char** argv) {
   CLI::App app{"Draws optimal gaits uphill, level and downhill (the paper's Fig. 2)."};
-  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), out = "optimal_gaits.png";
+  std::string table_path = kneed_walker::tools::packageFile("config/gait_table.yaml"), out;
   double speed_kmh = 4.5, step_m = 0.7;
   int snapshots = 8, width = 1200;
   app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions (YAML); the table must be made for them")
       ->check(CLI::ExistingFile)->capture_default_str();
-  app.add_option("--out", out, "PNG to write");
-  app.add_option("--speed", speed_kmh, "walking speed, km/h");
-  app.add_option("--step", step_m, "step length, m");
+  app.add_option("--out", out, "PNG to write")->required();
+  app.add_option("--speed", speed_kmh, "walking speed, km/h")->capture_default_str()
+      ->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--step", step_m, "step length, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
   app.add_option("--snapshots", snapshots, "stick figures per stride")->check(CLI::Range(2, 50));
   app.add_option("--width", width, "image width, px")->check(CLI::Range(300, 8000));
   CLI11_PARSE(app, argc, argv);

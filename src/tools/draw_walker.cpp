@@ -22,10 +22,10 @@ namespace kw = kneed_walker::core;
 
 int run(int argc, char** argv) {
   CLI::App app{"Draws the Kneed Walker walking: a PNG strip and optionally an animation."};
-  std::string out = "walker_strip.png", video;
+  std::string out, video;
   int strides = 3, snapshots = 10, width = 1400, fps = 30;
   double height_m = 1.75, mass_kg = 70;
-  app.add_option("--out", out, "PNG strip to write");
+  app.add_option("--out", out, "PNG strip to write")->required();
   app.add_option("--video", video, "animation to write (.avi, MJPG), one frame per 1/fps s");
   app.add_option("--strides", strides, "strides to simulate")->check(CLI::Range(1, 20));
   app.add_option("--snapshots", snapshots, "stick figures in the strip")->check(CLI::Range(2, 200));

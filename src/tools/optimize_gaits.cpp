@@ -1,7 +1,7 @@
 // optimize_gaits: solves the paper's grid of optimal cyclic gaits (§3.3) and writes the gait
 // table that ships in config/, so that users never have to run the optimiser.
 //
-//   rosrun kneed_walker optimize_gaits [--out config/gait_table.yaml] [--resume]
+//   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
 //                                      [--prior-fixed] [--seed-table config/gait_table.yaml]
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
@@ -75,11 +75,11 @@ std::string clock(double seconds) {
 
 int run(int argc, char** argv) {
   CLI::App app{"Solves the grid of optimal cyclic gaits and writes the gait table."};
-  std::string out = "gait_table.yaml";
+  std::string out;
   bool resume = false, retry_failed = false;
   int threads = 0, max_attempts = 4;
   double seed_speed = 4.5, seed_step = 0.7, seed_slope = 0.0;
-  app.add_option("--out", out, "gait table to write (YAML)");
+  app.add_option("--out", out, "gait table to write (YAML)")->required();
   app.add_flag("--resume", resume, "continue the table in --out");
   app.add_flag("--retry-failed", retry_failed, "with --resume: solve failed points again");
   app.add_option("--threads", threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
