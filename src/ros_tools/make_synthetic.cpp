@@ -301,11 +301,11 @@ int main(int argc, char** argv) {
   app.add_option("--prior", s.prior, "prior parameters")->capture_default_str();
   app.add_option("--walker-model", s.walker_model, "body proportions; the table must be made for them")
       ->capture_default_str();
-  app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.5, 10));
   auto* step = app.add_option("--step", w.step_length_m, "step length, m (not with --norms: the norms set it)")
                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
   auto* slope = app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill (not with --norms)")
-                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
+                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.2, 0.2));
   app.add_option("--norms", s.norms,
                  "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
                  "prior did not make")->excludes(step)->excludes(slope);
@@ -322,7 +322,7 @@ int main(int argc, char** argv) {
       ->expected(2);
   app.add_option("--duration", w.duration_s, "length, s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.01, 3600));
   app.add_option("--fps", w.fps, "frame rate, frames/s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(1, 1000));
-  app.add_option("--height", w.person_height_m, "the person's height, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.5, 2.5));
+  app.add_option("--height", w.person_height_m, "the person's height, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(1.0, 2.3));
   app.add_option("--seed", w.seed, "random seed: the same seed gives the same files")->capture_default_str()
       ->check(kneed_walker::tools::FiniteRange(0, 1.8e19));
   app.add_option("--noise", s.noise_sigma, "sensor noise, grey levels (standard deviation)")->capture_default_str()
@@ -338,6 +338,10 @@ int main(int argc, char** argv) {
   s.heading_given = app.count("--heading") > 0;
   if (s.heading_given && app.count("--oblique") > 0) {
     std::fprintf(stderr, "make_synthetic: --oblique turns the default heading; give it or --heading, not both\n");
+    return 2;
+  }
+  if (w.duration_s * w.fps > 100000) {
+    std::fprintf(stderr, "make_synthetic: --duration times --fps is %g frames; at most 100000\n", w.duration_s * w.fps);
     return 2;
   }
   if (s.end_speed_kmh > 0 && s.norms.empty()) {
