@@ -13,41 +13,21 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "kneed_walker/BodyPose.h"
 #include "kneed_walker/TrackingStatus.h"
+#include "joints_csv.h"
 #include "wait_for.h"
 
 namespace kneed_walker::ros_glue {
 namespace {
 
+using test::JointRow;
+using test::readJoints;
 using test::waitFor;
-
-// Rows of a joints CSV (frame,stamp,joint,x,y,z) in file order.
-struct JointRow {
-  int frame;
-  std::string joint;
-  double x, y, z;
-};
-std::vector<JointRow> readJoints(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<JointRow> rows;
-  std::string line;
-  std::getline(in, line);
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
-    std::string frame, stamp, joint, x, y, z;
-    std::getline(fields, frame, ','), std::getline(fields, stamp, ','), std::getline(fields, joint, ',');
-    std::getline(fields, x, ','), std::getline(fields, y, ','), std::getline(fields, z, ',');
-    rows.push_back({std::stoi(frame), joint, std::stod(x), std::stod(y), std::stod(z)});
-  }
-  return rows;
-}
 
 TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTracksALoopAgain) {
   ros::NodeHandle nh, private_nh("~");
