@@ -7,11 +7,13 @@
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <functional>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -62,14 +64,55 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
            status_sub.getNumPublishers() > 0;
   }, 60.0)) << "track.launch's nodelet did not connect";
 
+  // Mid-track, bad frames between good ones (stamped between them): each is skipped and named,
+  // the track goes on, and the good frames are tracked as if the bad ones had not come.
+  struct Spoiled {
+    const char* what;
+    std::function<void(sensor_msgs::Image&, sensor_msgs::CameraInfo&)> spoil;
+    const char* expected;  // in ~status's message
+  };
+  const std::vector<Spoiled> spoiled = {
+      {"NaN focal length", [](auto&, auto& info) { info.K[4] = std::nan(""); }, "no valid focal length"},
+      {"NaN distortion", [](auto&, auto& info) { info.D[0] = std::nan(""); }, "not finite"},
+      {"3 distortion coefficients", [](auto&, auto& info) { info.D.resize(3); }, "3 coefficients"},
+      {"unknown encoding", [](auto& image, auto&) { image.encoding = "32FC1"; }, "encoding '32FC1'"},
+      {"short data", [](auto& image, auto&) { image.data.resize(10); }, "bytes"},
+      {"camera_info of another size", [](auto&, auto& info) { info.width = 80; }, "camera_info is for 80x"},
+  };
+  ros::Subscriber diagnostics_sub;
+  std::map<std::string, std::string> diagnostics;  // the tracker's key-values, last seen
+  diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 20, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& d) {
+    for (const diagnostic_msgs::DiagnosticStatus& status : d->status)
+      if (status.name.find("tracker") != std::string::npos)
+        for (const diagnostic_msgs::KeyValue& kv : status.values) diagnostics[kv.key] = kv.value;
+  });
+  const size_t spoil_after = images.size() - 8;  // tracking by then
   for (size_t f = 0; f < images.size(); ++f) {
     info_pub.publish(infos[f]);
     image_pub.publish(images[f]);
     ASSERT_TRUE(waitFor([&] { return statuses.count(images[f]->header.stamp) > 0; }, 60.0)) << "no answer to frame " << f;
+    if (f != spoil_after) continue;
+    ASSERT_EQ(statuses.at(images[f]->header.stamp).state, TrackingStatus::TRACKING) << "not tracking before the bad frames";
+    for (size_t k = 0; k < spoiled.size(); ++k) {
+      sensor_msgs::Image image = *images[f];
+      sensor_msgs::CameraInfo info = *infos[f];
+      image.header.stamp = info.header.stamp = images[f]->header.stamp + ros::Duration(0.01 * (k + 1));
+      spoiled[k].spoil(image, info);
+      info_pub.publish(info);
+      image_pub.publish(image);
+      ASSERT_TRUE(waitFor([&] { return statuses.count(image.header.stamp) > 0; }, 10.0)) << "no answer to " << spoiled[k].what;
+      EXPECT_NE(statuses.at(image.header.stamp).message.find(spoiled[k].expected), std::string::npos)
+          << spoiled[k].what << ": " << statuses.at(image.header.stamp).message;
+    }
   }
   ASSERT_TRUE(waitFor([&] { return last.header.stamp == images.back()->header.stamp; }, 10.0));
+  const TrackingStatus& after_bad = statuses.at(images[spoil_after + 1]->header.stamp);
+  EXPECT_EQ(after_bad.state, TrackingStatus::TRACKING) << "the track did not go on after the bad frames: " << after_bad.message;
   EXPECT_EQ(last.frames_processed, images.size());
-  EXPECT_EQ(last.frames_skipped, 0u) << "frames were dropped or skipped: " << last.message;
+  EXPECT_EQ(last.frames_skipped, spoiled.size()) << "frames were dropped or skipped: " << last.message;
+  ASSERT_TRUE(waitFor([&] { return diagnostics["frames skipped (unusable)"] == std::to_string(spoiled.size()); }, 5.0))
+      << "/diagnostics says " << diagnostics["frames skipped (unusable)"] << " frames skipped";
+  EXPECT_EQ(diagnostics["frames dropped (arrived while busy)"], "0");
 
   // The same frames and seed through track_offline (as the nodelet: the background from the
   // first frames, the person found in the image, each frame's filtered estimate).
