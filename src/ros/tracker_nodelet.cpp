@@ -8,7 +8,8 @@
 // Inputs:  image (sensor_msgs/Image) + camera_info (sensor_msgs/CameraInfo), via
 //          image_transport (raw or compressed: ~image_transport), in the nodelet's namespace
 //          (remap them). The camera's pose: tf's world_frame -> camera_info's frame, or the
-//          ~camera_file calibration.
+//          ~camera_file calibration. ~init_box (sensor_msgs/RegionOfInterest, pixels): where the
+//          person is; the track (re)starts from that box at the next frame it can.
 // Outputs: ~body_pose (kneed_walker/BodyPose), ~pose (geometry_msgs/PoseWithCovarianceStamped),
 //          ~walker_state (kneed_walker/WalkerState), ~status (kneed_walker/TrackingStatus, latched),
 //          ~particle_cloud (geometry_msgs/PoseArray, throttled), ~markers
@@ -25,6 +26,7 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/package.h>
+#include <sensor_msgs/RegionOfInterest.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
@@ -62,6 +64,7 @@ class TrackerNodelet : public nodelet::Nodelet {
 
   void onInit() override;
   void onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  void onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box);
   void workerLoop();
   void process(const Frame& frame);
   // The session for this frame's camera: made on the first frame, made again when the image
@@ -81,6 +84,7 @@ class TrackerNodelet : public nodelet::Nodelet {
 
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   image_transport::CameraSubscriber camera_subscriber_;
+  ros::Subscriber init_box_subscriber_;
   image_transport::Publisher overlay_publisher_;
   ros::Publisher body_pose_publisher_, pose_publisher_, walker_state_publisher_, status_publisher_,
       particle_cloud_publisher_, markers_publisher_;
@@ -97,6 +101,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::optional<Frame> waiting_;
+  std::optional<cv::Rect2d> waiting_box_;  // from ~init_box, for the worker's session
   bool stopping_ = false;
   std::thread worker_;
 
@@ -192,6 +197,7 @@ void TrackerNodelet::onInit() {
     throw std::invalid_argument("image_transport '" + config_.ros.image_transport + "' is not installed");
   }
   worker_ = std::thread(&TrackerNodelet::workerLoop, this);
+  init_box_subscriber_ = private_nh.subscribe("init_box", 1, &TrackerNodelet::onInitBox, this);
   camera_subscriber_ = image_transport_->subscribeCamera(
       "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this,
       image_transport::TransportHints(config_.ros.image_transport, ros::TransportHints(), private_nh));
@@ -214,6 +220,17 @@ void TrackerNodelet::onFrame(const sensor_msgs::ImageConstPtr& image, const sens
   }
   waiting_ = Frame{image, info};
   wake_.notify_one();
+}
+
+void TrackerNodelet::onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box) {
+  if (box->width == 0 || box->height == 0) {
+    NODELET_ERROR("~init_box: a box of %ux%u px is empty; ignored", box->width, box->height);
+    return;
+  }
+  NODELET_INFO("~init_box: the track starts from the box at (%u, %u), %ux%u px, at the next frame", box->x_offset,
+               box->y_offset, box->width, box->height);
+  std::lock_guard<std::mutex> lock(mutex_);
+  waiting_box_ = cv::Rect2d(box->x_offset, box->y_offset, box->width, box->height);
 }
 
 void TrackerNodelet::workerLoop() {
@@ -314,6 +331,18 @@ void TrackerNodelet::process(const Frame& frame) {
     bgr = cv_bridge::toCvShare(frame.image, "bgr8");
   } catch (const cv_bridge::Exception& e) {
     return skipFrame(header, std::string("cannot convert the image to bgr8: ") + e.what());
+  }
+  std::optional<cv::Rect2d> box;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    box.swap(waiting_box_);
+  }
+  if (box) {
+    try {
+      session_->startFromBox(*box);
+    } catch (const std::invalid_argument& e) {
+      NODELET_ERROR("~init_box (%g, %g) %gx%g px cannot be used: %s", box->x, box->y, box->width, box->height, e.what());
+    }
   }
   std::vector<kw::tracking::SessionAnswer> answers;
   try {

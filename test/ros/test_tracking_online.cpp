@@ -9,9 +9,11 @@
 #include <rosbag/view.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/RegionOfInterest.h>
 #include <sensor_msgs/Image.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <cstdio>
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "kneed_walker/BodyPose.h"
+#include "kneed_walker/core/vision/camera.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "joints_csv.h"
 #include "wait_for.h"
@@ -183,6 +186,39 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   std::printf("looped: %zu frames tracked again, largest difference from the first pass %.3g m\n", poses.size(),
               loop_difference_m);
   EXPECT_EQ(loop_difference_m, 0.0);
+
+  // Once more with the person's box on ~init_box (around the truth's first pose): the track
+  // starts from it at the first frame, where on its own the nodelet found the person later.
+  const auto first_tracked = std::find_if(statuses.begin(), statuses.end(), [](const auto& s) {
+    return s.second.state == TrackingStatus::TRACKING;
+  });
+  ASSERT_NE(first_tracked, statuses.begin()) << "the person was found at the first frame already";
+  const core::vision::Camera camera = core::vision::Camera::load(sequence + "_camera.yml", 0.001);
+  cv::Rect2d box;
+  for (const JointRow& row : truth)
+    if (row.frame == 0)
+      if (const auto px = camera.project(Eigen::Vector3d(row.x, row.y, row.z))) box |= cv::Rect2d(px->x(), px->y(), 1, 1);
+  box.y -= 0.12 * box.height;  // the head's top above its centre
+  box.height *= 1.16;
+  sensor_msgs::RegionOfInterest roi;
+  roi.x_offset = static_cast<uint32_t>(box.x);
+  roi.y_offset = static_cast<uint32_t>(box.y);
+  roi.width = static_cast<uint32_t>(box.width);
+  roi.height = static_cast<uint32_t>(box.height);
+  ros::Publisher box_pub = nh.advertise<sensor_msgs::RegionOfInterest>("/kneed_walker/init_box", 1, true);
+  ASSERT_TRUE(waitFor([&] { return box_pub.getNumSubscribers() > 0; }, 10.0));
+  box_pub.publish(roi);
+  ros::WallDuration(0.3).sleep();
+  statuses.clear();
+  for (size_t f = 0; f < images.size(); ++f) {
+    info_pub.publish(infos[f]);
+    image_pub.publish(images[f]);
+    ASSERT_TRUE(waitFor([&] { return statuses.count(images[f]->header.stamp) > 0; }, 60.0)) << "box: no answer to frame " << f;
+  }
+  const TrackingStatus& first = statuses.at(images.front()->header.stamp);
+  std::printf("from ~init_box (%u, %u) %ux%u: frame 0 %s (%s)\n", roi.x_offset, roi.y_offset, roi.width, roi.height,
+              first.state == TrackingStatus::TRACKING ? "tracked" : "not tracked", first.message.c_str());
+  EXPECT_EQ(first.state, TrackingStatus::TRACKING) << first.message;
 }
 
 }  // namespace
