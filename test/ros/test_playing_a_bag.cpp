@@ -58,7 +58,7 @@ TEST(PlayingABag, JointsFromTfAndBodyPoseAgreeAndFollowTheTruthAndEveryFrameIsAc
       nh.subscribe<BodyPose>("/kneed_walker/body_pose", 100, [&](const BodyPoseConstPtr& p) { poses[p->header.stamp] = *p; });
   ros::Subscriber status_sub =
       nh.subscribe<TrackingStatus>("/kneed_walker/status", 100, [&](const TrackingStatusConstPtr& s) { last = *s; });
-  // The bag plays at half speed after a 2 s delay: 31 frames in about 8 s of sim time.
+  // The bag plays at a quarter speed after a 2 s delay: 31 frames in about 14 s.
   ASSERT_TRUE(waitFor([&] { return last.header.stamp == image_stamps.back(); }, 180.0))
       << "the last frame was not answered; last status: " << last.message;
   ros::WallDuration(0.5).sleep();  // the last frame's tf and pose
