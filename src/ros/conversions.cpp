@@ -207,6 +207,17 @@ WalkerState toWalkerState(const core::tracking::TrackEstimate& e, const std_msgs
   message.ground_slope = e.gait_slope_rad;
   message.time_in_stride = e.walker.time_in_stride;
   message.stride_count = e.walker.heel_strikes;
+  const core::dynamics::SpringParameters& s = e.springs;
+  message.stance_knee_stiffness = s.stance_knee_stiffness;
+  message.stance_knee_damping = s.stance_knee_damping;
+  message.swing_knee_stiffness = s.swing_knee_stiffness;
+  message.swing_knee_rest_angle = s.swing_knee_rest_angle;
+  message.swing_knee_damping = s.swing_knee_damping;
+  message.hip_stiffness = s.hip_stiffness;
+  message.torso_stiffness = s.torso_stiffness;
+  message.torso_rest_angle = s.torso_rest_angle;
+  message.torso_damping = s.torso_damping;
+  message.toe_off_impulse = e.toe_off_impulse_ns;
   return message;
 }
 

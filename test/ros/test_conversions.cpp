@@ -101,5 +101,35 @@ TEST(CameraConversion, NonUnitQuaternionIsRefused) {
   EXPECT_THROW(toCamera(info, pose), std::invalid_argument);
 }
 
+// The walker state message carries the MAP walker as the estimate gives it, in SI: angles,
+// rates, the stride clock and every spring field (the nodelet once left the springs at 0).
+TEST(WalkerStateConversion, CarriesTheStateAndEverySpring) {
+  core::tracking::TrackEstimate e;
+  e.walker.q << 0.1, 0.2, 0.3, 0.4, 0.5;
+  e.walker.qdot << 1, 2, 3, 4, 5;
+  e.walker.stance_leg = core::dynamics::Leg::kRight;
+  e.walker.time_in_stride = 0.25;
+  e.walker.heel_strikes = 7;
+  e.gait_slope_rad = 0.05;
+  e.springs = {11, 12, 13, 0.14, 15, 16, 17, -0.18, 19};
+  e.toe_off_impulse_ns = 20;
+  std_msgs::Header header;
+  header.frame_id = "world";
+  const WalkerState m = toWalkerState(e, header);
+  EXPECT_EQ(m.stance_leg, WalkerState::RIGHT);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(m.q[i], e.walker.q[i]);
+    EXPECT_EQ(m.qdot[i], e.walker.qdot[i]);
+  }
+  EXPECT_EQ(m.ground_slope, 0.05);
+  EXPECT_EQ(m.time_in_stride, 0.25);
+  EXPECT_EQ(m.stride_count, 7u);
+  const std::vector<double> springs = {m.stance_knee_stiffness, m.stance_knee_damping, m.swing_knee_stiffness,
+                                       m.swing_knee_rest_angle, m.swing_knee_damping, m.hip_stiffness,
+                                       m.torso_stiffness, m.torso_rest_angle, m.torso_damping};
+  EXPECT_EQ(springs, (std::vector<double>{11, 12, 13, 0.14, 15, 16, 17, -0.18, 19}));
+  EXPECT_EQ(m.toe_off_impulse, 20);
+}
+
 }  // namespace
 }  // namespace kneed_walker::ros_glue

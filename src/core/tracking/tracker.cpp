@@ -354,6 +354,22 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   e.walker.time_in_stride *= prior.naturalTimeS();
   e.walker.stance_foot_x *= prior.legLengthM();
   e.gait_slope_rad = prior.slopeRad();
+  {
+    // The walker's units are the body mass M, the leg length L and the natural time T = √(L/g):
+    // a torque is M g L, a damping M g L T, an impulse M L / T.
+    const double mass_kg = options_.person_mass_kg, leg_m = prior.legLengthM(), time_s = prior.naturalTimeS();
+    const double torque_nm = mass_kg * leg_m * leg_m / (time_s * time_s);
+    const dynamics::WalkerControls c = prior.walkerPrior().controls(particles[best].body.walker);
+    e.springs = c.springs;
+    e.springs.stance_knee_stiffness *= torque_nm;
+    e.springs.swing_knee_stiffness *= torque_nm;
+    e.springs.hip_stiffness *= torque_nm;
+    e.springs.torso_stiffness *= torque_nm;
+    e.springs.stance_knee_damping *= torque_nm * time_s;
+    e.springs.swing_knee_damping *= torque_nm * time_s;
+    e.springs.torso_damping *= torque_nm * time_s;
+    e.toe_off_impulse_ns = c.toe_off_impulse * mass_kg * leg_m / time_s;
+  }
   // Weighted spreads.
   std::array<Eigen::Vector3d, body::kNumBodyJoints> mean, second;
   mean.fill(Eigen::Vector3d::Zero());

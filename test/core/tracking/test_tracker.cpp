@@ -16,9 +16,10 @@ const test::RenderedWalk& scene() {
   return walk;
 }
 
-std::unique_ptr<Tracker> makeTracker(int particles, int threads) {
+std::unique_ptr<Tracker> makeTracker(int particles, int threads, double mass_kg = 70.0) {
   const test::RenderedWalk& s = scene();
   TrackerOptions options;
+  options.person_mass_kg = mass_kg;
   options.num_particles = particles;
   options.resample_ess_threshold = particles / 10.0;
   options.num_threads = threads;
@@ -75,6 +76,36 @@ TEST(Tracker, SameSeedSameTrackOnOneOrTwoThreads) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t f = 0; f < a.size(); ++f)
     for (int j = 0; j < body::kNumBodyJoints; ++j) EXPECT_EQ(a[f].pose.joints[j], b[f].pose.joints[j]) << "frame " << f;
+}
+
+// The MAP walker's springs and toe-off impulse come out in SI for the person: in human ranges,
+// and, the walker being dimensionless, a person twice as heavy is tracked alike with every
+// stiffness, damping and impulse twice as large and the rest angles the same.
+TEST(Tracker, TheWalkersSpringsAreInSiForThePerson) {
+  const auto light = makeTracker(200, 0, 70.0), heavy = makeTracker(200, 0, 140.0);
+  std::vector<TrackEstimate> a, b;
+  track(*light, &a);
+  track(*heavy, &b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t f = 0; f < a.size(); ++f) {
+    const dynamics::SpringParameters &s = a[f].springs, &t = b[f].springs;
+    EXPECT_EQ(a[f].pose.joints[body::kWaist], b[f].pose.joints[body::kWaist]) << "the mass changed the track";
+    EXPECT_GE(s.stance_knee_stiffness, 0) << "frame " << f;  // the prior's stiffnesses are truncated at 0
+    EXPECT_GE(s.hip_stiffness, 0) << "frame " << f;
+    EXPECT_LT(s.hip_stiffness, 2000) << "frame " << f;  // N·m/rad: people's are in the tens to hundreds
+    EXPECT_GE(a[f].toe_off_impulse_ns, 0);
+    EXPECT_LT(a[f].toe_off_impulse_ns, 100);  // N·s
+    for (const auto& [x, y] : {std::pair{s.stance_knee_stiffness, t.stance_knee_stiffness}, {s.hip_stiffness, t.hip_stiffness},
+                               {s.torso_stiffness, t.torso_stiffness}, {s.swing_knee_damping, t.swing_knee_damping},
+                               {s.torso_damping, t.torso_damping}, {a[f].toe_off_impulse_ns, b[f].toe_off_impulse_ns}})
+      EXPECT_NEAR(y, 2 * x, 1e-9 * std::abs(x)) << "frame " << f;
+    EXPECT_EQ(s.torso_rest_angle, t.torso_rest_angle);
+    EXPECT_EQ(s.swing_knee_rest_angle, t.swing_knee_rest_angle);
+  }
+  const dynamics::SpringParameters& s = a.back().springs;
+  std::cout << "MAP springs at the last frame (70 kg): stance knee " << s.stance_knee_stiffness << " N m/rad, hip "
+            << s.hip_stiffness << ", torso " << s.torso_stiffness << " (damping " << s.torso_damping
+            << " N m s/rad); toe-off impulse " << a.back().toe_off_impulse_ns << " N s\n";
 }
 
 TEST(Tracker, RefusesToStartWithoutABackgroundOrOnAWrongFrame) {

@@ -68,6 +68,11 @@ struct TrackEstimate {
   // stance_foot_x m; and the slope of its gait, rad.
   dynamics::WalkerState walker;
   double gait_slope_rad = 0;
+  // The springs in force for the MAP particle (paper eqs. 1–3: its stochastic stiffnesses, the
+  // gait's dampings and rest angles) and the toe-off impulse ι of its coming heel strike, in SI
+  // for the person's height and mass: N·m/rad, N·m·s/rad, rad; N·s.
+  dynamics::SpringParameters springs;
+  double toe_off_impulse_ns = 0;
   double effective_sample_size = 0;
   bool resampled = false;
   double map_log_likelihood = 0;
