@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kneed_walker/core/vision/body_projection.h"
+
 namespace kneed_walker::ros_glue {
 namespace {
 
@@ -252,7 +254,8 @@ std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::
 }
 
 visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& e, const std_msgs::Header& header,
-                                          const std::string& body_id, double lifetime_s) {
+                                          const std::string& body_id, double lifetime_s,
+                                          const core::body::BodyShape& shape) {
   visualization_msgs::MarkerArray markers;
   visualization_msgs::Marker bones;
   bones.header = header;
@@ -278,7 +281,46 @@ visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& e
     joints.points.push_back(toPoint(e.pose.joints[j]));
     joints.colors.push_back(jointColour(core::body::BodyJoint(j)));
   }
-  markers.markers = {bones, joints};
+  // The parts: each a tapered elliptical cylinder, its side and end caps as triangles.
+  visualization_msgs::Marker parts = bones;
+  parts.ns = "parts_" + body_id;
+  parts.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  parts.scale.x = parts.scale.y = parts.scale.z = 1;
+  parts.color.r = parts.color.g = parts.color.b = 1;  // rviz multiplies the vertex colours by this
+  parts.color.a = 0.5f;                              // half transparent: the skeleton shows through
+  parts.points.clear();
+  parts.colors.clear();
+  const core::vision::PartAxes axes = core::vision::partAxes(e.pose, shape);
+  for (int p = 0; p < core::body::kNumBodyParts; ++p) {
+    const core::vision::PartFrame frame = core::vision::partFrame(e.pose, axes, p);
+    const core::body::PartShape& part = shape.parts[p];
+    auto surface = [&](int end, int k) {
+      const double angle = 2 * M_PI * k / kPartMeshSides;
+      const Eigen::Vector3d& centre = end == 0 ? axes.proximal[p] : axes.distal[p];
+      const double half_width = 0.5 * (end == 0 ? part.proximal_width_m : part.distal_width_m);
+      const double half_depth = 0.5 * (end == 0 ? part.proximal_depth_m : part.distal_depth_m);
+      return Eigen::Vector3d(centre + half_width * std::cos(angle) * frame.across +
+                             half_depth * std::sin(angle) * frame.depth);
+    };
+    std_msgs::ColorRGBA colour = p == core::body::kTorsoPart || p == core::body::kHeadPart
+                                     ? jointColour(core::body::kWaist)
+                                     : jointColour((p - core::body::kLeftThighPart) % 2 == 0 ? core::body::kLeftKnee
+                                                                                              : core::body::kRightKnee);
+    auto triangle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+      for (const Eigen::Vector3d* v : {&a, &b, &c}) {
+        parts.points.push_back(toPoint(*v));
+        parts.colors.push_back(colour);
+      }
+    };
+    for (int k = 0; k < kPartMeshSides; ++k) {
+      const Eigen::Vector3d p0 = surface(0, k), p1 = surface(0, k + 1), d0 = surface(1, k), d1 = surface(1, k + 1);
+      triangle(p0, p1, d1);
+      triangle(p0, d1, d0);
+      triangle(axes.proximal[p], p1, p0);
+      triangle(axes.distal[p], d0, d1);
+    }
+  }
+  markers.markers = {bones, joints, parts};
   return markers;
 }
 

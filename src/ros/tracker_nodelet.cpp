@@ -393,7 +393,7 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
   body_pose_publisher_.publish(boost::make_shared<BodyPose>(toBodyPose(estimate, header, id)));
   pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
   walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
-  markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0)));
+  markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0, session_->tracker().shape())));
   if (tf_broadcaster_) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
   const kw::tracking::Tracker& tracker = session_->tracker();
   const ros::WallTime now = ros::WallTime::now();

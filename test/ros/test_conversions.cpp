@@ -1,10 +1,12 @@
 #include "kneed_walker/ros/conversions.h"
+#include "kneed_walker/core/vision/body_projection.h"
 
 #include <gtest/gtest.h>
 #include <sensor_msgs/image_encodings.h>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -129,6 +131,49 @@ TEST(WalkerStateConversion, CarriesTheStateAndEverySpring) {
                                        m.torso_stiffness, m.torso_rest_angle, m.torso_damping};
   EXPECT_EQ(springs, (std::vector<double>{11, 12, 13, 0.14, 15, 16, 17, -0.18, 19}));
   EXPECT_EQ(m.toe_off_impulse, 20);
+}
+
+// The markers: the skeleton, the joints and the body's parts as the likelihood sees them, each
+// part a closed tapered elliptical cylinder around its axis, no wider than its shape.
+TEST(MarkerConversion, DrawsTheSkeletonAndEveryPartAsItsCylinder) {
+  core::tracking::TrackEstimate e;
+  const core::body::BodyShape shape = core::body::BodyShape::forHeight(1.75);
+  e.pose.forward = Eigen::Vector3d(0, 1, 0);
+  e.pose.up = Eigen::Vector3d(0, 0, 1);
+  e.pose.left = Eigen::Vector3d(-1, 0, 0);
+  const double z[core::body::kNumBodyJoints] = {0.93, 1.43, 1.63, 0.93, 0.93, 0.48, 0.48, 0.07, 0.07};
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
+    const double x = j == core::body::kLeftHip || j == core::body::kLeftKnee || j == core::body::kLeftAnkle ? -0.09
+                     : j == core::body::kRightHip || j == core::body::kRightKnee || j == core::body::kRightAnkle ? 0.09 : 0.0;
+    e.pose.joints[j] = Eigen::Vector3d(x, 0.02 * j, z[j]);
+  }
+  std_msgs::Header header;
+  header.frame_id = "world";
+  const visualization_msgs::MarkerArray m = toMarkers(e, header, "1", 1.0, shape);
+  ASSERT_EQ(m.markers.size(), 3u);
+  EXPECT_EQ(m.markers[0].type, visualization_msgs::Marker::LINE_LIST);
+  EXPECT_EQ(m.markers[1].points.size(), static_cast<size_t>(core::body::kNumBodyJoints));
+  const visualization_msgs::Marker& parts = m.markers[2];
+  EXPECT_EQ(parts.type, visualization_msgs::Marker::TRIANGLE_LIST);
+  const size_t per_part = 4 * kPartMeshSides * 3;  // side (2 triangles a side) and two end caps
+  ASSERT_EQ(parts.points.size(), core::body::kNumBodyParts * per_part);
+  ASSERT_EQ(parts.colors.size(), parts.points.size());
+  const core::vision::PartAxes axes = core::vision::partAxes(e.pose, shape);
+  for (int p = 0; p < core::body::kNumBodyParts; ++p) {
+    const Eigen::Vector3d a = axes.proximal[p], axis = (axes.distal[p] - a).normalized();
+    const core::body::PartShape& s = shape.parts[p];
+    const double widest = 0.5 * std::max({s.proximal_width_m, s.proximal_depth_m, s.distal_width_m, s.distal_depth_m});
+    double farthest = 0;
+    for (size_t k = p * per_part; k < (p + 1) * per_part; ++k) {
+      const Eigen::Vector3d v(parts.points[k].x, parts.points[k].y, parts.points[k].z);
+      const double along = (v - a).dot(axis);
+      EXPECT_GE(along, -1e-12);
+      EXPECT_LE(along, (axes.distal[p] - a).norm() + 1e-12);
+      farthest = std::max(farthest, (v - a - along * axis).norm());
+    }
+    EXPECT_LE(farthest, widest + 1e-12) << core::body::partName(core::body::BodyPart(p));
+    EXPECT_GE(farthest, 0.5 * std::min(s.proximal_width_m, s.distal_width_m) - 1e-12) << core::body::partName(core::body::BodyPart(p));
+  }
 }
 
 }  // namespace

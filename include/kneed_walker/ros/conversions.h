@@ -53,10 +53,14 @@ WalkerState toWalkerState(const core::tracking::TrackEstimate& estimate, const s
 // world -> body_<id>, and body_<id> -> each joint's frame.
 std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::TrackEstimate& estimate,
                                                           const std_msgs::Header& header, const std::string& body_id);
-// The skeleton (bones as lines, joints as spheres), coloured left, right and trunk; they
-// expire after `lifetime_s` so a lost track's body does not linger.
+// The skeleton (bones as lines, joints as spheres) and the body's parts as the likelihood sees
+// them (the tapered elliptical cylinders of `shape`, a triangle mesh of kPartMeshSides sides
+// each, half transparent), coloured left, right and trunk; they expire after `lifetime_s` so a
+// lost track's body does not linger.
+constexpr int kPartMeshSides = 12;
 visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
-                                          const std::string& body_id, double lifetime_s);
+                                          const std::string& body_id, double lifetime_s,
+                                          const core::body::BodyShape& shape);
 // Each particle's mid-hip, facing its walking direction.
 geometry_msgs::PoseArray toParticleCloud(const std::vector<core::tracking::TrackerParticle>& particles,
                                          const std_msgs::Header& header);

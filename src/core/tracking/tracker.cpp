@@ -102,8 +102,10 @@ body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
   return onGround(bank_[particle.gait].prior->pose(particle.body), particle);
 }
 
+const body::BodyShape& Tracker::shape() const { return bank_.front().prior->shape(); }
+
 void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const {
-  vision::projectBodyParts(camera_, pose, bank_.front().prior->shape(), outlines);
+  vision::projectBodyParts(camera_, pose, shape(), outlines);
 }
 
 double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const {

@@ -63,6 +63,14 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
   return axes;
 }
 
+PartFrame partFrame(const body::BodyPose& pose, const PartAxes& axes, int part) {
+  PartFrame frame;
+  frame.along = (axes.distal[part] - axes.proximal[part]).normalized();
+  frame.across = (pose.left - pose.left.dot(frame.along) * frame.along).normalized();
+  frame.depth = frame.along.cross(frame.across);
+  return frame;
+}
+
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                       BodyOutlines& outlines) {
   const PartAxes axes = partAxes(pose, shape);
@@ -80,9 +88,8 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
   for (int p = 0; p < body::kNumBodyParts; ++p) {
     PartOutline& outline = outlines[p];
     const body::PartShape& part = shape.parts[p];
-    const Eigen::Vector3d axis = (axes.distal[p] - axes.proximal[p]).normalized();
-    const Eigen::Vector3d across = (pose.left - pose.left.dot(axis) * axis).normalized();
-    const Eigen::Vector3d depth = axis.cross(across);
+    const PartFrame frame = partFrame(pose, axes, p);
+    const Eigen::Vector3d &across = frame.across, &depth = frame.depth;
     std::array<Eigen::Vector2d, 2 * kOutlineSamples> points;
     outline.visible = true;
     for (int end = 0; end < 2 && outline.visible; ++end) {

@@ -127,6 +127,8 @@ class Tracker {
   body::BodyPose pose(const TrackerParticle& particle) const;
   // Its parts' image outlines.
   void project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const;
+  // The person's body parts (for the person's height).
+  const body::BodyShape& shape() const;
 
  private:
   struct BankGait {

@@ -21,6 +21,14 @@ struct PartAxes {
 };
 PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape);
 
+// A part's unit axes: along it (proximal to distal), across the body (BodyPose::left made square
+// to it) and its depth axis square to both. A point of the part's surface at an end with centre
+// c, half width a and half depth b is c + a cos θ · across + b sin θ · depth.
+struct PartFrame {
+  Eigen::Vector3d along, across, depth;
+};
+PartFrame partFrame(const body::BodyPose& pose, const PartAxes& axes, int part);
+
 // A part's outline in the image: the convex hull of its two end ellipses, sampled at
 // kOutlineSamples points each. `visible` is false when any point is behind the camera.
 constexpr int kOutlineSamples = 8;
