@@ -143,6 +143,10 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("publish_tf", r.publish_tf);
   reader.read("particle_cloud_interval_s", r.particle_cloud_interval_s);
   reader.read("publish_overlay", r.publish_overlay);
+  // dynamic_reconfigure's button (cfg/Tracker.cfg) sits beside the parameters it starts from;
+  // it means nothing at start.
+  bool restart = false;
+  reader.read("restart", restart);
   reader.read("camera_file", r.camera_file);
   reader.read("camera_file_unit_m", r.camera_file_unit_m);
   reader.read("init_box", r.init_box);

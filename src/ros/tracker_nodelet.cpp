@@ -21,6 +21,7 @@
 // dropped and counted. The worker runs the tracker (its per-particle work on all cores).
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
 #include <diagnostic_updater/update_functions.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -41,6 +42,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "kneed_walker/TrackerConfig.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "kneed_walker/core/prior/walker_prior.h"
 #include "kneed_walker/core/tracking/tracking_session.h"
@@ -65,6 +67,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   void onInit() override;
   void onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
   void onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box);
+  void onReconfigure(TrackerConfig& config, uint32_t level);
   void workerLoop();
   void process(const Frame& frame);
   // The session for this frame's camera: made on the first frame, made again when the image
@@ -102,6 +105,17 @@ class TrackerNodelet : public nodelet::Nodelet {
   std::condition_variable wake_;
   std::optional<Frame> waiting_;
   std::optional<cv::Rect2d> waiting_box_;  // from ~init_box, for the worker's session
+  // What dynamic_reconfigure may change (cfg/Tracker.cfg), for the worker: set under mutex_,
+  // copied by the worker at each frame.
+  struct LiveSettings {
+    int num_particles = 0;
+    bool publish_tf = true, publish_particle_cloud = true, publish_overlay = true;
+    double particle_cloud_interval_s = 0.5;
+  };
+  LiveSettings live_;
+  bool restart_requested_ = false;
+  LiveSettings publishing_;  // the worker's copy for this frame
+  std::unique_ptr<dynamic_reconfigure::Server<TrackerConfig>> reconfigure_server_;
   bool stopping_ = false;
   std::thread worker_;
 
@@ -116,10 +130,12 @@ class TrackerNodelet : public nodelet::Nodelet {
   uint64_t frames_received_ = 0, frames_dropped_ = 0, frames_processed_ = 0, frames_skipped_ = 0,
            frames_answered_ = 0, resets_ = 0;
   double last_effective_sample_size_ = 0, last_processing_s_ = 0;
+  int num_particles_ = 0;
   std::string state_name_ = "waiting for frames", last_problem_;
 };
 
 TrackerNodelet::~TrackerNodelet() {
+  reconfigure_server_.reset();  // no reconfiguration while the worker stops
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
@@ -156,13 +172,15 @@ void TrackerNodelet::onInit() {
   pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", queue);
   walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", queue);
   status_publisher_ = private_nh.advertise<TrackingStatus>("status", queue, /*latch=*/true);
-  if (config_.ros.publish_particle_cloud)
-    particle_cloud_publisher_ = private_nh.advertise<geometry_msgs::PoseArray>("particle_cloud", 2);
+  // Every output is advertised; the switches (which dynamic_reconfigure may flip) gate publishing.
+  particle_cloud_publisher_ = private_nh.advertise<geometry_msgs::PoseArray>("particle_cloud", 2);
   markers_publisher_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 2);
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
-  if (config_.ros.publish_overlay)
-    overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
-  if (config_.ros.publish_tf) tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
+  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  live_ = {config_.tracker.num_particles, config_.ros.publish_tf, config_.ros.publish_particle_cloud,
+           config_.ros.publish_overlay, config_.ros.particle_cloud_interval_s};
+  publishing_ = live_;
   if (!file_camera_) {
     tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
@@ -181,6 +199,11 @@ void TrackerNodelet::onInit() {
   diagnostics_->add(*output_rate_);
   diagnostics_->add(*output_latency_);
   diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  num_particles_ = config_.tracker.num_particles;
+  // What may change while running starts from the parameters just validated (cfg/Tracker.cfg).
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TrackerConfig>>(private_nh);
+  reconfigure_server_->setCallback(
+      [this](TrackerConfig& config, uint32_t level) { onReconfigure(config, level); });
 
   std_msgs::Header start;
   start.stamp = ros::Time::now();
@@ -231,6 +254,15 @@ void TrackerNodelet::onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box)
                box->y_offset, box->width, box->height);
   std::lock_guard<std::mutex> lock(mutex_);
   waiting_box_ = cv::Rect2d(box->x_offset, box->y_offset, box->width, box->height);
+}
+
+void TrackerNodelet::onReconfigure(TrackerConfig& config, uint32_t /*level*/) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (config.num_particles != live_.num_particles) restart_requested_ = true;
+  if (config.restart) restart_requested_ = true;
+  config.restart = false;  // a button: it reads false again
+  live_ = {config.num_particles, config.publish_tf, config.publish_particle_cloud, config.publish_overlay,
+           config.particle_cloud_interval_s};
 }
 
 void TrackerNodelet::workerLoop() {
@@ -307,6 +339,25 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
 void TrackerNodelet::process(const Frame& frame) {
   const auto started = std::chrono::steady_clock::now();
   const std_msgs::Header& header = frame.image->header;
+  bool restart = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    publishing_ = live_;
+    std::swap(restart, restart_requested_);
+  }
+  if (restart) {
+    // dynamic_reconfigure: a new particle count (the resampling threshold keeps its share) or the
+    // restart button. The session is made again at this frame, with the new options.
+    const int particles = publishing_.num_particles;
+    config_.tracker.resample_ess_threshold *= static_cast<double>(particles) / config_.tracker.num_particles;
+    config_.tracker.num_particles = particles;
+    NODELET_INFO("reconfigured: starting over with %d particles", particles);
+    session_.reset();
+    unanswered_.clear();
+    std::lock_guard<std::mutex> stats(stats_mutex_);
+    ++resets_;
+    num_particles_ = particles;
+  }
   std::string problem = frameProblem(*frame.image, *frame.info);
   if (problem.empty() && frame.image->width * static_cast<uint64_t>(frame.image->height) > 64'000'000ull)
     problem = "the image is " + std::to_string(frame.image->width) + "x" + std::to_string(frame.image->height) +
@@ -394,16 +445,16 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
   pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
   walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
   markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0, session_->tracker().shape())));
-  if (tf_broadcaster_) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
+  if (publishing_.publish_tf) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
   const kw::tracking::Tracker& tracker = session_->tracker();
   const ros::WallTime now = ros::WallTime::now();
-  if (config_.ros.publish_particle_cloud && tracker.started() &&
-      (now - last_cloud_).toSec() >= config_.ros.particle_cloud_interval_s) {
+  if (publishing_.publish_particle_cloud && tracker.started() &&
+      (now - last_cloud_).toSec() >= publishing_.particle_cloud_interval_s) {
     last_cloud_ = now;
     particle_cloud_publisher_.publish(
         boost::make_shared<geometry_msgs::PoseArray>(toParticleCloud(tracker.particles(), header)));
   }
-  if (config_.ros.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) {
+  if (publishing_.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) {
     cv_bridge::CvImagePtr picture = cv_bridge::toCvCopy(image, "bgr8");
     kw::vision::BodyOutlines outlines;
     tracker.project(estimate.pose, outlines);
@@ -463,7 +514,7 @@ void TrackerNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapp
   status.add("restarts (stamps went back, images changed)", resets_);
   status.add("effective sample size", last_effective_sample_size_);
   status.add("processing time (s)", last_processing_s_);
-  status.add("particles", config_.tracker.num_particles);
+  status.add("particles", num_particles_);
   status.add("input", camera_subscriber_.getTopic());
 }
 

@@ -1,5 +1,6 @@
 // Runs inside tracker_nodelet.test: a manager with kneed_walker/TrackerNodelet loaded as
 // /kneed_walker, its input remapped to /camera/image_raw.
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <nodelet/NodeletLoad.h>
 #include <ros/ros.h>
@@ -89,7 +90,7 @@ sensor_msgs::Image makeImage(uint32_t width, uint32_t height) {
 
 // Bad input of every kind is skipped, counted and named in ~status; the nodelet survives it
 // and takes good frames again after it; a stamp that goes back (a looping bag) starts over.
-TEST(TrackerNodelet, SkipsAndNamesBadFramesAndTakesGoodOnesAfterThem) {
+TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
   ros::NodeHandle nh;
   ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("/camera/image_raw", 10);
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/camera/camera_info", 10);
@@ -173,6 +174,43 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesAndTakesGoodOnesAfterThem) {
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "did not start over: " << last.message;
   EXPECT_EQ(last.num_particles, 5000u);
   EXPECT_EQ(last.header.frame_id, "world");
+
+  // dynamic_reconfigure: a new particle count starts over with it at the next frame; the
+  // restart button starts over and reads false again.
+  auto send = [&](double at) {
+    sensor_msgs::Image image = makeImage(64, 48);
+    sensor_msgs::CameraInfo info = makeInfo(64, 48);
+    image.header.stamp = info.header.stamp = ros::Time(at);
+    image.header.frame_id = info.header.frame_id = "camera_optical";
+    const int before = received;
+    info_pub.publish(info);
+    image_pub.publish(image);
+    return waitFor([&] { return received > before; }, 10.0);
+  };
+  ASSERT_TRUE(send(10.15));
+  EXPECT_NE(last.message.find("(2/"), std::string::npos) << last.message;
+  dynamic_reconfigure::Reconfigure reconfigure;
+  dynamic_reconfigure::IntParameter count;
+  count.name = "num_particles";
+  count.value = 123;
+  reconfigure.request.config.ints.push_back(count);
+  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", reconfigure));
+  ASSERT_TRUE(send(10.25));
+  EXPECT_EQ(last.num_particles, 123u);
+  EXPECT_NE(last.message.find("(1/"), std::string::npos) << "a new particle count did not start over: " << last.message;
+  ASSERT_TRUE(send(10.35));
+  EXPECT_NE(last.message.find("(2/"), std::string::npos) << last.message;
+  dynamic_reconfigure::Reconfigure button;
+  dynamic_reconfigure::BoolParameter restart;
+  restart.name = "restart";
+  restart.value = true;
+  button.request.config.bools.push_back(restart);
+  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", button));
+  for (const dynamic_reconfigure::BoolParameter& b : button.response.config.bools)
+    if (b.name == "restart") EXPECT_FALSE(b.value) << "the restart button stayed pressed";
+  ASSERT_TRUE(send(10.45));
+  EXPECT_NE(last.message.find("(1/"), std::string::npos) << "restart did not start over: " << last.message;
+  EXPECT_EQ(last.num_particles, 123u);
 }
 
 TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
