@@ -319,7 +319,7 @@ int main(int argc, char** argv) {
                  "walking direction in the world XY plane, rad from +X towards +Y; default: across the view, "
                  "towards the image's left")->check(kneed_walker::tools::FiniteRange(-10, 10));
   app.add_option("--start-pixel", s.start_pixel, "image point (x y) where the walk starts on the ground")
-      ->expected(2);
+      ->expected(2)->check(kneed_walker::tools::FiniteRange(-1e12, 1e12));
   app.add_option("--duration", w.duration_s, "length, s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.01, 3600));
   app.add_option("--fps", w.fps, "frame rate, frames/s")->capture_default_str()->check(kneed_walker::tools::FiniteRange(1, 1000));
   app.add_option("--height", w.person_height_m, "the person's height, m")->capture_default_str()->check(kneed_walker::tools::FiniteRange(1.0, 2.3));
