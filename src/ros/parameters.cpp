@@ -153,6 +153,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("gait_table", r.gait_table);
   reader.read("prior_config", r.prior_config);
   reader.read("walker_model", r.walker_model);
+  reader.read("prior_noise_scale", r.prior_noise_scale);
 
   core::tracking::SessionOptions& session = config.session;
   reader.read("background_frames", session.background_frames);
@@ -162,6 +163,9 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
     reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +
                       " is outside [0, 3600]");
+  if (!(std::isfinite(r.prior_noise_scale) && r.prior_noise_scale >= 0 && r.prior_noise_scale <= 100))
+    reader.addProblem(reader.qualified("prior_noise_scale") + " = " + std::to_string(r.prior_noise_scale) +
+                      " is outside [0, 100]");
   if (!(std::isfinite(r.camera_file_unit_m) && r.camera_file_unit_m >= 1e-6 && r.camera_file_unit_m <= 1e3))
     reader.addProblem(reader.qualified("camera_file_unit_m") + " = " + std::to_string(r.camera_file_unit_m) +
                       " is outside [1e-06, 1000]");

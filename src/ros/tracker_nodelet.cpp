@@ -73,6 +73,8 @@ class TrackerNodelet : public nodelet::Nodelet {
   // The session for this frame's camera: made on the first frame, made again when the image
   // size changes. Empty string on success, else why the frame cannot be used.
   std::string prepareSession(const Frame& frame);
+  // The prior's options with the torque noise scaled by ~prior_noise_scale.
+  kw::prior::PriorOptions priorOptions() const;
   void publishAnswer(const kw::tracking::SessionAnswer& answer, const sensor_msgs::ImageConstPtr& image);
   void skipFrame(const std_msgs::Header& header, const std::string& reason);
   void publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
@@ -109,6 +111,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   // copied by the worker at each frame.
   struct LiveSettings {
     int num_particles = 0;
+    double prior_noise_scale = 1;
     bool publish_tf = true, publish_particle_cloud = true, publish_overlay = true;
     double particle_cloud_interval_s = 0.5;
   };
@@ -178,8 +181,8 @@ void TrackerNodelet::onInit() {
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-  live_ = {config_.tracker.num_particles, config_.ros.publish_tf, config_.ros.publish_particle_cloud,
-           config_.ros.publish_overlay, config_.ros.particle_cloud_interval_s};
+  live_ = {config_.tracker.num_particles, config_.ros.prior_noise_scale, config_.ros.publish_tf,
+           config_.ros.publish_particle_cloud, config_.ros.publish_overlay, config_.ros.particle_cloud_interval_s};
   publishing_ = live_;
   if (!file_camera_) {
     tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
@@ -258,11 +261,12 @@ void TrackerNodelet::onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box)
 
 void TrackerNodelet::onReconfigure(TrackerConfig& config, uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (config.num_particles != live_.num_particles) restart_requested_ = true;
+  if (config.num_particles != live_.num_particles || config.prior_noise_scale != live_.prior_noise_scale)
+    restart_requested_ = true;
   if (config.restart) restart_requested_ = true;
   config.restart = false;  // a button: it reads false again
-  live_ = {config.num_particles, config.publish_tf, config.publish_particle_cloud, config.publish_overlay,
-           config.particle_cloud_interval_s};
+  live_ = {config.num_particles, config.prior_noise_scale, config.publish_tf, config.publish_particle_cloud,
+           config.publish_overlay, config.particle_cloud_interval_s};
 }
 
 void TrackerNodelet::workerLoop() {
@@ -285,6 +289,12 @@ void TrackerNodelet::workerLoop() {
       skipFrame(frame.image->header, std::string("tracker error, starting over: ") + e.what());
     }
   }
+}
+
+kw::prior::PriorOptions TrackerNodelet::priorOptions() const {
+  kw::prior::PriorOptions options = prior_options_;
+  for (double& s : options.noise_scale) s *= config_.ros.prior_noise_scale;
+  return options;
 }
 
 std::string TrackerNodelet::prepareSession(const Frame& frame) {
@@ -320,7 +330,7 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
   }
   const kw::vision::GroundPlane ground = file_camera_ ? file_ground_ : kw::vision::GroundPlane{};
   session_ = std::make_unique<kw::tracking::TrackingSession>(
-      std::make_unique<kw::tracking::Tracker>(*camera, ground, prior_table_, prior_options_, config_.tracker),
+      std::make_unique<kw::tracking::Tracker>(*camera, ground, prior_table_, priorOptions(), config_.tracker),
       config_.session);
   session_size_ = size;
   session_frame_id_ = frame.image->header.frame_id;
@@ -346,12 +356,14 @@ void TrackerNodelet::process(const Frame& frame) {
     std::swap(restart, restart_requested_);
   }
   if (restart) {
-    // dynamic_reconfigure: a new particle count (the resampling threshold keeps its share) or the
-    // restart button. The session is made again at this frame, with the new options.
+    // dynamic_reconfigure: a new particle count (the resampling threshold keeps its share), a new
+    // prior noise scale, or the restart button. The session is made again at this frame.
     const int particles = publishing_.num_particles;
     config_.tracker.resample_ess_threshold *= static_cast<double>(particles) / config_.tracker.num_particles;
     config_.tracker.num_particles = particles;
-    NODELET_INFO("reconfigured: starting over with %d particles", particles);
+    config_.ros.prior_noise_scale = publishing_.prior_noise_scale;
+    NODELET_INFO("reconfigured: starting over with %d particles, prior noise x%g", particles,
+                 config_.ros.prior_noise_scale);
     session_.reset();
     unanswered_.clear();
     std::lock_guard<std::mutex> stats(stats_mutex_);

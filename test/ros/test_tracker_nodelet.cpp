@@ -211,6 +211,15 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
   ASSERT_TRUE(send(10.45));
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "restart did not start over: " << last.message;
   EXPECT_EQ(last.num_particles, 123u);
+  ASSERT_TRUE(send(10.55));
+  dynamic_reconfigure::Reconfigure noise;
+  dynamic_reconfigure::DoubleParameter scale;
+  scale.name = "prior_noise_scale";
+  scale.value = 0.5;
+  noise.request.config.doubles.push_back(scale);
+  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", noise));
+  ASSERT_TRUE(send(10.65));
+  EXPECT_NE(last.message.find("(1/"), std::string::npos) << "a new noise scale did not start over: " << last.message;
 }
 
 TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {

@@ -33,6 +33,7 @@ struct RosInterfaceOptions {
   std::vector<double> init_box;        // the person's box in the first tracked frame, x1 y1 x2 y2, px (empty: find them)
   // The model's files; empty: the package's config/.
   std::string gait_table, prior_config, walker_model;
+  double prior_noise_scale = 1.0;      // factor on the prior's torque noise scales s_j (eq. 11), [0, 100]
 };
 
 struct TrackerNodeConfig {
