@@ -189,35 +189,30 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
   };
   ASSERT_TRUE(send(10.15));
   EXPECT_NE(last.message.find("(2/"), std::string::npos) << last.message;
-  dynamic_reconfigure::Reconfigure reconfigure;
-  dynamic_reconfigure::IntParameter count;
-  count.name = "num_particles";
-  count.value = 123;
-  reconfigure.request.config.ints.push_back(count);
-  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", reconfigure));
+  // One parameter through the reconfigure service; returns the configuration it answers with.
+  auto reconfigure = [](auto parameter, auto dynamic_reconfigure::Config::*list, const std::string& name, auto value) {
+    dynamic_reconfigure::Reconfigure call;
+    parameter.name = name;
+    parameter.value = value;
+    (call.request.config.*list).push_back(parameter);
+    EXPECT_TRUE(ros::service::call("/kneed_walker/set_parameters", call)) << name;
+    return call.response.config;
+  };
+  reconfigure(dynamic_reconfigure::IntParameter(), &dynamic_reconfigure::Config::ints, "num_particles", 123);
   ASSERT_TRUE(send(10.25));
   EXPECT_EQ(last.num_particles, 123u);
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "a new particle count did not start over: " << last.message;
   ASSERT_TRUE(send(10.35));
   EXPECT_NE(last.message.find("(2/"), std::string::npos) << last.message;
-  dynamic_reconfigure::Reconfigure button;
-  dynamic_reconfigure::BoolParameter restart;
-  restart.name = "restart";
-  restart.value = true;
-  button.request.config.bools.push_back(restart);
-  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", button));
-  for (const dynamic_reconfigure::BoolParameter& b : button.response.config.bools)
+  const dynamic_reconfigure::Config pressed =
+      reconfigure(dynamic_reconfigure::BoolParameter(), &dynamic_reconfigure::Config::bools, "restart", true);
+  for (const dynamic_reconfigure::BoolParameter& b : pressed.bools)
     if (b.name == "restart") EXPECT_FALSE(b.value) << "the restart button stayed pressed";
   ASSERT_TRUE(send(10.45));
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "restart did not start over: " << last.message;
   EXPECT_EQ(last.num_particles, 123u);
   ASSERT_TRUE(send(10.55));
-  dynamic_reconfigure::Reconfigure noise;
-  dynamic_reconfigure::DoubleParameter scale;
-  scale.name = "prior_noise_scale";
-  scale.value = 0.5;
-  noise.request.config.doubles.push_back(scale);
-  ASSERT_TRUE(ros::service::call("/kneed_walker/set_parameters", noise));
+  reconfigure(dynamic_reconfigure::DoubleParameter(), &dynamic_reconfigure::Config::doubles, "prior_noise_scale", 0.5);
   ASSERT_TRUE(send(10.65));
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "a new noise scale did not start over: " << last.message;
 }
