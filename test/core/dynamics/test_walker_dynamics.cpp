@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "kneed_walker/core/dynamics/walker_simulation.h"
@@ -168,6 +169,43 @@ TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
               mechanicalEnergy(map, kPerson.gravity, 0, before.q, before.qdot,
                                before.stance_foot_x) + 1e-9);
   }
+}
+
+// With a toe-off impulse ι (eq. 5), the angular momentum about the new contact changes by
+// exactly the moment of ι applied at the old contact, along the trailing leg towards the hip:
+// the ground's impulse at the new contact and the knees' limit impulses have no moment there.
+// (With the impulse's moment the wrong way round, the change has the wrong sign: issue 15.)
+TEST(WalkerDynamics, ToeOffImpulseChangesAngularMomentumByItsMoment) {
+  const KinematicMap map = kneedWalkerMap(kPerson);
+  RandomStates random(3);  // the states of the test above, whose swing foot can be put on the ground
+  std::mt19937 pushes(9);
+  std::uniform_real_distribution<double> small(-0.15, 0.15), push(5.0, 40.0);  // N·s
+  double worst = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    WalkerState before;
+    before.q << small(random.rng), -0.3 + small(random.rng), -0.35 + small(random.rng),
+        0.3 + small(random.rng), 0.2 + small(random.rng);
+    before.qdot = random.rates();
+    before.stance_foot_x = -0.1;
+    before.knee_on_limit = {trial % 2 == 0, trial % 3 == 0};
+    if (before.knee_on_limit[0]) before.q[kStanceShank] = before.q[kStanceThigh];
+    if (before.knee_on_limit[1]) before.q[kSwingShank] = before.q[kSwingThigh];
+    touchDown(map, before.q);
+    const Point new_contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
+                              Point(0, map.foot_radius);
+    const Point old_contact = stanceFootCentre(map, before.q, before.stance_foot_x) - Point(0, map.foot_radius);
+    const Point hip = position(map, map.hip, before.q, before.stance_foot_x);
+    const double iota = push(pushes);
+    const Point impulse = iota * (hip - old_contact) / std::abs(hip - old_contact);
+    const Point arm = old_contact - new_contact;
+    const double moment = arm.real() * impulse.imag() - arm.imag() * impulse.real();  // z, counter-clockwise
+    const WalkerState without = afterHeelStrike(map, before, 0.0), with = afterHeelStrike(map, before, iota);
+    const double change = angularMomentum(map, with.q, with.qdot, with.stance_foot_x, new_contact) -
+                          angularMomentum(map, without.q, without.qdot, without.stance_foot_x, new_contact);
+    EXPECT_NEAR(change, moment, 1e-11 * std::abs(moment)) << "trial " << trial << ", ι = " << iota << " N s";  // measured 8e-14
+    worst = std::max(worst, std::abs(change - moment) / std::abs(moment));
+  }
+  std::cout << "toe-off impulse's moment about the new contact: worst relative error " << worst << "\n";
 }
 
 TEST(WalkerDynamics, ToeOffImpulsePushesAlongTheTrailingLeg) {

@@ -105,6 +105,43 @@ TEST(WalkerPrior, TorqueNoiseIsCauchyWithItsScale) {
   EXPECT_GT(largest, 0.01 * 0.5 * options.noise_innovation_limit) << "the tail is still heavy";
 }
 
+// Eq. 11 with α ≠ 0: the innovations recovered as (η_t − α η_{t−1}) / s are the truncated
+// Cauchy's (never beyond the limit; median |ε| = tan(atan(limit) / 2)), joint by joint; the
+// per-frame stiffness spreads about the stride's mean by frame_sd. (With the α η_{t−1} term
+// dropped, the recovered innovations exceed the limit and their median moves: issue 15.)
+TEST(WalkerPrior, NoiseInnovationsAndStiffnessSpreadFollowEquation11) {
+  const Fixture f;
+  PriorOptions options;  // α = 0.9 on every joint
+  const WalkerPrior prior(f.sim, f.gait, options);
+  common::Random random(6);
+  WalkerParticle p = prior.sample(0.0, random);
+  std::array<std::vector<double>, dynamics::kNumJoints> innovations;
+  std::vector<double> stiffness_deviation;
+  for (int i = 0; i < 3000; ++i) {
+    const dynamics::JointTorques before = p.noise;
+    const std::uint32_t stride = p.stride_of_means;
+    prior.transition(p, 1e-3, random);
+    for (int j = 0; j < dynamics::kNumJoints; ++j)
+      innovations[j].push_back(std::abs(p.noise[j] - options.noise_decay[j] * before[j]) / options.noise_scale[j]);
+    if (p.stride_of_means == stride && p.stride_mean[kPriorHip] > 0.05)  // far from the truncation at 0
+      stiffness_deviation.push_back(p.stiffness[kPriorHip] - p.stride_mean[kPriorHip]);
+  }
+  const double median_expected = std::tan(std::atan(options.noise_innovation_limit) / 2);
+  for (int j = 0; j < dynamics::kNumJoints; ++j) {
+    std::vector<double>& e = innovations[j];
+    EXPECT_LE(*std::max_element(e.begin(), e.end()), options.noise_innovation_limit * (1 + 1e-9)) << "joint " << j;
+    std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+    EXPECT_NEAR(e[e.size() / 2], median_expected, 0.06 * median_expected) << "joint " << j;
+  }
+  ASSERT_GT(stiffness_deviation.size(), 1000u);
+  double sum = 0, sum2 = 0;
+  for (double d : stiffness_deviation) sum += d, sum2 += d * d;
+  const double n = static_cast<double>(stiffness_deviation.size());
+  const double sd = std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  EXPECT_NEAR(sum / n, 0.0, 4 * options.frame_sd[kPriorHip] / std::sqrt(n));
+  EXPECT_NEAR(sd, options.frame_sd[kPriorHip], 0.05 * options.frame_sd[kPriorHip]);
+}
+
 // Acceptance (issue 5): of 1000 strides sampled from the level optimal gait with the shipped
 // prior, at 30 frames per second, at least 99 % end in a heel strike rather than a fall. In
 // chains of 10 strides errors build up (the optimal gaits are unstable cycles: measured 91 %);
