@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <stdexcept>
 
 #include "shipped_config.h"
@@ -196,6 +199,53 @@ TEST(GaitTable, InterpolatesInsideTheGridAndRefusesOutside) {
   EXPECT_THROW(interpolateGait(table, 5.0, 0.7, 0.2), std::out_of_range);
 }
 
+// Interpolation is trilinear: the middle of a cell whose four corners (at one slope of the grid)
+// are feasible is their mean, controls and start state alike; a target that needs an
+// infeasible corner is refused naming that grid point (issue 15's gait-table contracts).
+TEST(GaitTable, ACellsMiddleIsTheMeanOfItsCornersAndAMissingCornerIsNamed) {
+  const GaitTable& table = shipped();
+  const GaitGrid& g = table.grid;
+  bool found_full = false, found_hole = false;
+  for (int v = 0; v + 1 < static_cast<int>(g.speeds_kmh.size()); ++v)
+    for (int l = 0; l + 1 < static_cast<int>(g.step_lengths_m.size()); ++l)
+      for (int sl = 0; sl < static_cast<int>(g.slopes_rad.size()); ++sl) {
+        int feasible = 0;
+        for (int corner = 0; corner < 4; ++corner)
+          feasible += table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].feasible;
+        const double speed = 0.5 * (g.speeds_kmh[v] + g.speeds_kmh[v + 1]);
+        const double step = 0.5 * (g.step_lengths_m[l] + g.step_lengths_m[l + 1]);
+        if (feasible == 4 && !found_full) {
+          found_full = true;
+          const Gait middle = interpolateGait(table, speed, step, g.slopes_rad[sl]);
+          double hip = 0;
+          dynamics::Vector5 q = dynamics::Vector5::Zero();
+          for (int corner = 0; corner < 4; ++corner) {
+            const Gait& c = table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].gait;
+            hip += 0.25 * c.controls.springs.hip_stiffness;
+            q += 0.25 * c.start.q;
+          }
+          EXPECT_NEAR(middle.controls.springs.hip_stiffness, hip, 1e-12 * std::abs(hip));
+          EXPECT_LT((middle.start.q - q).norm(), 1e-12);
+        }
+        if (feasible == 3 && !found_hole) {
+          found_hole = true;
+          int missing = 0;
+          for (int corner = 0; corner < 4; ++corner)
+            if (!table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].feasible) missing = corner;
+          std::ostringstream named;
+          named << "no feasible gait at " << g.speeds_kmh[v + (missing & 1)] << " km/h, "
+                << g.step_lengths_m[l + (missing >> 1)] << " m";
+          try {
+            interpolateGait(table, speed, step, g.slopes_rad[sl]);
+            ADD_FAILURE() << "a cell with an infeasible corner was interpolated";
+          } catch (const std::out_of_range& e) {
+            EXPECT_NE(std::string(e.what()).find(named.str()), std::string::npos) << e.what();
+          }
+        }
+      }
+  EXPECT_TRUE(found_full && found_hole);
+}
+
 // Of two runs, the lower effort wins per grid point; a feasible gait beats none; tables of
 // other grids or other fixed controls are refused.
 TEST(GaitTable, KeepsTheLowerEffortOfTwoRuns) {
@@ -250,6 +300,31 @@ TEST(GaitTable, MalformedTablesAreRefusedWithTheReason) {
   }
   std::remove(path.c_str());
   EXPECT_THROW(loadGaitTable(path, test::shippedWalkerModel()), std::invalid_argument);
+
+  // The shipped table spoilt three ways: a grid point left out, two out of order, a knee flag 2.
+  std::ifstream in(kShippedTable);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto refusal = [&](const std::string& text) {
+    const std::string spoilt = testing::TempDir() + "spoilt_gait_table.yaml";
+    std::ofstream(spoilt) << text;
+    try {
+      loadGaitTable(spoilt, test::shippedWalkerModel());
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::size_t second = good.find("   -\n      index: 1\n"), third = good.find("   -\n      index: 2\n");
+  ASSERT_NE(second, std::string::npos);
+  ASSERT_NE(third, std::string::npos);
+  const std::string without_one = good.substr(0, second) + good.substr(third);
+  EXPECT_NE(refusal(without_one).find("must list 270 grid points"), std::string::npos) << refusal(without_one);
+  std::string swapped = good;
+  swapped.replace(swapped.find("      index: 1\n"), 15, "      index: 2\n");
+  EXPECT_NE(refusal(swapped).find("out of order"), std::string::npos) << refusal(swapped);
+  std::string bad_knees = good;
+  bad_knees.replace(bad_knees.find("knees_locked: [ 1, 0 ]"), 22, "knees_locked: [ 2, 0 ]");
+  EXPECT_NE(refusal(bad_knees).find("knees_locked must hold two flags, 0 or 1"), std::string::npos) << refusal(bad_knees);
 }
 
 }  // namespace

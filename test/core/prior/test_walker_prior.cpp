@@ -142,6 +142,42 @@ TEST(WalkerPrior, NoiseInnovationsAndStiffnessSpreadFollowEquation11) {
   EXPECT_NEAR(sd, options.frame_sd[kPriorHip], 0.05 * options.frame_sd[kPriorHip]);
 }
 
+// Through sampled chains with the noise on: a stride's values are drawn at each heel strike and
+// only then (the transition after it), the knees never hyperextend, and on a sloped gait the
+// torso's rest angle is the paper's γ/3.
+TEST(WalkerPrior, StridesAreDrawnAtHeelStrikesKneesStayFlexedTorsoRestsAtAThirdOfTheSlope) {
+  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(test::shippedWalkerModel()));
+  const gait::GaitTable table = gait::loadGaitTable(kTable, test::shippedWalkerModel());
+  const double slope = table.grid.slopes_rad[3];  // the first uphill slope of the grid
+  gait::Gait sloped = gait::interpolateGait(table, 4.0, 0.7, slope);
+  sloped.stride_duration = sim.stride(sloped.controls, sloped.start).duration;
+  const WalkerPrior prior(sim, sloped, PriorOptions{});
+  common::Random random(11);
+  int redrawn = 0, strikes = 0, transitions = 0;
+  double least_flexion = 1;
+  for (int chain = 0; chain < 20; ++chain) {
+    WalkerParticle p = prior.sample(0.1 * chain, random);
+    for (int i = 0; i < 200 && !p.walker.fallen; ++i) {
+      const WalkerParticle before = p;
+      prior.transition(p, 0.05, random);
+      ++transitions;
+      const bool new_stride = p.stride_mean != before.stride_mean;
+      EXPECT_EQ(new_stride, before.walker.heel_strikes != before.stride_of_means) << "chain " << chain << ", frame " << i;
+      redrawn += new_stride;
+      strikes += p.walker.heel_strikes != before.walker.heel_strikes;
+      if (p.walker.fallen) break;
+      least_flexion = std::min({least_flexion, p.walker.q[dynamics::kStanceThigh] - p.walker.q[dynamics::kStanceShank],
+                                p.walker.q[dynamics::kSwingThigh] - p.walker.q[dynamics::kSwingShank]});
+      EXPECT_NEAR(prior.controls(p).springs.torso_rest_angle, slope / 3, 1e-12);
+    }
+  }
+  std::cout << transitions << " transitions, " << strikes << " heel strikes, " << redrawn
+            << " strides drawn; least knee flexion " << least_flexion << " rad\n";
+  EXPECT_GT(strikes, 50);
+  EXPECT_GE(redrawn, strikes - 20);  // a chain's last heel strike may end it before its redraw
+  EXPECT_GE(least_flexion, -1e-9);
+}
+
 // Acceptance (issue 5): of 1000 strides sampled from the level optimal gait with the shipped
 // prior, at 30 frames per second, at least 99 % end in a heel strike rather than a fall. In
 // chains of 10 strides errors build up (the optimal gaits are unstable cycles: measured 91 %);
