@@ -165,5 +165,25 @@ TEST(Likelihood, HiddenPartsAndOutsidePixelsAreCounted) {
   EXPECT_NEAR(outside[body::kTorsoPart].appearance, s.options.outside_ratio, 1e-9);
 }
 
+// Occlusion: of two parts with the same outline, the nearer one has the pixels and the farther
+// one is hidden behind it, whichever parts they are (the far leg behind the near one, paper §4).
+TEST(Likelihood, ANearerPartHidesAFartherOne) {
+  const Scene& s = scene();
+  const FrameEvidence e = s.evidence(s.options);
+  BodyOutlines outlines;
+  projectBodyParts(s.camera, s.walk.frames[s.frame].pose, s.shape, outlines);
+  for (const bool left_nearer : {true, false}) {
+    BodyOutlines overlapping = outlines;
+    const int near = left_nearer ? body::kLeftThighPart : body::kRightThighPart;
+    const int far = left_nearer ? body::kRightThighPart : body::kLeftThighPart;
+    overlapping[far] = overlapping[near];
+    overlapping[far].depth_m = overlapping[near].depth_m + 0.5;
+    PartScores scores;
+    evaluateLikelihood(e, overlapping, nullptr, s.options, &scores);
+    EXPECT_GT(scores[near].pixels, 50) << (left_nearer ? "left" : "right") << " thigh nearer";
+    EXPECT_EQ(scores[far].pixels, 0) << (left_nearer ? "right" : "left") << " thigh behind it";
+  }
+}
+
 }  // namespace
 }  // namespace kneed_walker::core::vision
