@@ -51,7 +51,8 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
   } else if (!std::all_of(info.D.begin(), info.D.end(), [](double d) { return std::isfinite(d); })) {
     problem << "camera_info D holds a value that is not finite";
   } else if (!(info.D.empty() || info.D.size() == 4 || info.D.size() == 5 || info.D.size() == 8) ||
-             (info.distortion_model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL && info.D.size() != 8)) {
+             (info.distortion_model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL && info.D.size() != 8) ||
+             (info.distortion_model == sensor_msgs::distortion_models::PLUMB_BOB && info.D.size() == 8)) {
     problem << "camera_info D has " << info.D.size() << " coefficients for model '" << info.distortion_model
             << "' (plumb_bob: 4 or 5, rational_polynomial: 8)";
   } else if (image.header.frame_id.empty()) {

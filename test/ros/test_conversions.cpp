@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 namespace kneed_walker::ros_glue {
@@ -40,6 +41,27 @@ TEST(FrameProblem, ConsistentFrameIsAccepted) {
   f.info.D.clear();
   f.info.distortion_model.clear();
   EXPECT_EQ(frameProblem(f.image, f.info), "") << "no distortion given is a pinhole camera";
+}
+
+// Every encoding the README lists is accepted at its own pixel size, and a plumb_bob camera
+// with 4 or 5 coefficients and a rational_polynomial one with 8; other counts are refused.
+TEST(FrameProblem, EveryListedEncodingAndDistortionModelIsAccepted) {
+  for (const auto& [encoding, bytes] : {std::pair{"mono8", 1}, {"bgr8", 3}, {"rgb8", 3}, {"bgra8", 4}, {"rgba8", 4}}) {
+    Frame f;
+    f.image.encoding = encoding;
+    f.image.step = 4 * bytes;
+    f.image.data.assign(3 * f.image.step, 0);
+    EXPECT_EQ(frameProblem(f.image, f.info), "") << encoding;
+  }
+  for (const auto& [model, count, accepted] :
+       {std::tuple{"plumb_bob", 4, true}, {"plumb_bob", 5, true}, {"plumb_bob", 3, false}, {"plumb_bob", 8, false},
+        {"rational_polynomial", 8, true}, {"rational_polynomial", 5, false}}) {
+    Frame f;
+    f.info.distortion_model = model;
+    f.info.D.assign(count, 0.0);
+    EXPECT_EQ(frameProblem(f.image, f.info).empty(), accepted) << model << " with " << count << " coefficients: "
+                                                                << frameProblem(f.image, f.info);
+  }
 }
 
 TEST(FrameProblem, EachDefectIsNamed) {
