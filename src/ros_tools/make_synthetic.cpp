@@ -18,14 +18,12 @@
 //       --background ../shared/data/pets2009/vtest.avi --out-dir /tmp/synthetic  (one line)
 //   rosrun kneed_walker make_synthetic --config test/sequences/level_slow.ini --out-dir DIR
 #include <CLI/CLI.hpp>
-#include <boost/make_shared.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <ros/package.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
-#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <cmath>
@@ -40,6 +38,7 @@
 #include "kneed_walker/core/synthetic/norm_walk.h"
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/vision/background.h"
+#include "kneed_walker/ros/bag_writing.h"
 #include "kneed_walker/ros/conversions.h"
 
 namespace kw = kneed_walker::core;
@@ -186,20 +185,7 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
 
   const std::string camera_frame = "camera_optical", world_frame = "world";
   const ros::Time first_stamp(s.start_stamp_s);
-  {
-    tf2_msgs::TFMessage tf;
-    tf.transforms.push_back(kneed_walker::ros_glue::cameraPose(camera, world_frame, camera_frame));
-    tf.transforms.back().header.stamp = first_stamp;
-    // A latched connection, as tf2's static broadcaster makes it (a header given to rosbag
-    // replaces its own, so it carries the message's type too).
-    auto latched = boost::make_shared<ros::M_string>();
-    (*latched)["type"] = ros::message_traits::datatype(tf);
-    (*latched)["md5sum"] = ros::message_traits::md5sum(tf);
-    (*latched)["message_definition"] = ros::message_traits::definition(tf);
-    (*latched)["latching"] = "1";
-    (*latched)["callerid"] = "/make_synthetic";
-    bag.write("/tf_static", first_stamp, tf, latched);
-  }
+  kneed_walker::ros_glue::writeStaticCameraPose(bag, camera, world_frame, camera_frame, first_stamp, "/make_synthetic");
   sensor_msgs::CameraInfo info = kneed_walker::ros_glue::toCameraInfo(camera, camera_frame);
   for (size_t i = 0; i < walk.frames.size(); ++i) {
     const kw::synthetic::SyntheticFrame& frame = walk.frames[i];
