@@ -2,6 +2,7 @@
 // /kneed_walker, its input remapped to /camera/image_raw.
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
+#include <image_transport/image_transport.h>
 #include <nodelet/NodeletLoad.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -68,6 +69,21 @@ TEST(TrackerNodelet, AdvertisesItsOutputs) {
   }
 }
 
+// The camera 3 m up, looking along +X (optical z forward, x right = -Y, y down = -Z), on a
+// latched /tf_static publisher.
+void publishCameraPose(ros::Publisher& tf_pub) {
+  geometry_msgs::TransformStamped camera_pose;
+  camera_pose.header.frame_id = "world";
+  camera_pose.child_frame_id = "camera_optical";
+  camera_pose.transform.translation.z = 3;
+  camera_pose.transform.rotation.x = -0.5, camera_pose.transform.rotation.y = 0.5;
+  camera_pose.transform.rotation.z = -0.5, camera_pose.transform.rotation.w = 0.5;
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(camera_pose);
+  tf_pub.publish(tf);
+  ros::WallDuration(0.5).sleep();
+}
+
 sensor_msgs::CameraInfo makeInfo(uint32_t width, uint32_t height) {
   sensor_msgs::CameraInfo info;
   info.width = width;
@@ -109,17 +125,7 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
   ASSERT_TRUE(waitFor([&] {
     return image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the nodelet did not subscribe to /camera/image_raw + /camera/camera_info";
-  // The camera 3 m up, looking along +X (optical z forward, x right = -Y, y down = -Z).
-  geometry_msgs::TransformStamped camera_pose;
-  camera_pose.header.frame_id = "world";
-  camera_pose.child_frame_id = "camera_optical";
-  camera_pose.transform.translation.z = 3;
-  camera_pose.transform.rotation.x = -0.5, camera_pose.transform.rotation.y = 0.5;
-  camera_pose.transform.rotation.z = -0.5, camera_pose.transform.rotation.w = 0.5;
-  tf2_msgs::TFMessage tf;
-  tf.transforms.push_back(camera_pose);
-  tf_pub.publish(tf);
-  ros::WallDuration(0.5).sleep();
+  publishCameraPose(tf_pub);
 
   struct Case {
     const char* what;
@@ -261,6 +267,42 @@ TEST(TrackerNodelet, ManagerRefusesNodeletWithBadParameters) {
   const bool loaded = load.call(request) && request.response.success;
   EXPECT_FALSE(loaded) << "a nodelet with resample_mixing = 2 was loaded";
   EXPECT_EQ(advertisedTopics().count("/refused_tracker/status"), 0u);
+}
+
+// ~image_transport: compressed: a second tracker reads JPEG images (the package's compressed
+// transport, image_transport_plugins.xml; Debian packages only raw) from a camera publisher that
+// offers every installed transport, and takes them as frames.
+TEST(TrackerNodelet, TakesCompressedImages) {
+  ros::NodeHandle nh;
+  nh.setParam("/compressed_tracker/image_transport", "compressed");
+  ros::ServiceClient load = nh.serviceClient<nodelet::NodeletLoad>("/manager/load_nodelet");
+  ASSERT_TRUE(load.waitForExistence(ros::Duration(30.0)));
+  nodelet::NodeletLoad request;
+  request.request.name = "/compressed_tracker";
+  request.request.type = "kneed_walker/TrackerNodelet";
+  request.request.remap_source_args = {"/image"};  // the nodelet subscribes "image" in its parent namespace
+  request.request.remap_target_args = {"/jpeg_camera/image_raw"};
+  ASSERT_TRUE(load.call(request) && request.response.success) << "the tracker with the compressed transport was refused";
+  ros::Publisher tf_pub = nh.advertise<tf2_msgs::TFMessage>("/tf_static", 1, /*latch=*/true);
+  publishCameraPose(tf_pub);
+  image_transport::ImageTransport transport(nh);
+  image_transport::CameraPublisher camera = transport.advertiseCamera("/jpeg_camera/image_raw", 5);
+  TrackingStatus last;
+  ros::Subscriber status_sub = nh.subscribe<TrackingStatus>("/compressed_tracker/status", 10,
+                                                            [&](const TrackingStatusConstPtr& m) { last = *m; });
+  ASSERT_TRUE(waitFor([&] { return camera.getNumSubscribers() > 0; }, 30.0)) << "nobody subscribed to the camera";
+  EXPECT_TRUE(advertisedTopics().count("/jpeg_camera/image_raw/compressed")) << "no compressed sub-topic";
+  ros::WallDuration(1.0).sleep();  // the camera's count may be camera_info's: let the image subscription connect too
+  for (int f = 0; f < 3; ++f) {
+    sensor_msgs::Image image = makeImage(64, 48);
+    sensor_msgs::CameraInfo info = makeInfo(64, 48);
+    image.header.stamp = info.header.stamp = ros::Time(20.0 + 0.1 * f);
+    image.header.frame_id = info.header.frame_id = "camera_optical";
+    camera.publish(image, info);
+    ASSERT_TRUE(waitFor([&] { return last.frames_processed == static_cast<uint64_t>(f + 1); }, 10.0))
+        << "frame " << f << " not taken: " << last.message;
+  }
+  EXPECT_EQ(last.frames_skipped, 0u) << last.message;
 }
 
 }  // namespace
