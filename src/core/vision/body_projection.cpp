@@ -63,14 +63,6 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
   return axes;
 }
 
-PartFrame partFrame(const body::BodyPose& pose, const PartAxes& axes, int part) {
-  PartFrame frame;
-  frame.along = (axes.distal[part] - axes.proximal[part]).normalized();
-  frame.across = (pose.left - pose.left.dot(frame.along) * frame.along).normalized();
-  frame.depth = frame.along.cross(frame.across);
-  return frame;
-}
-
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                       BodyOutlines& outlines) {
   const PartAxes axes = partAxes(pose, shape);

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <array>
 
@@ -27,7 +28,14 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape);
 struct PartFrame {
   Eigen::Vector3d along, across, depth;
 };
-PartFrame partFrame(const body::BodyPose& pose, const PartAxes& axes, int part);
+// Inline: the per-particle projection computes it for every part.
+inline PartFrame partFrame(const body::BodyPose& pose, const PartAxes& axes, int part) {
+  PartFrame frame;
+  frame.along = (axes.distal[part] - axes.proximal[part]).normalized();
+  frame.across = (pose.left - pose.left.dot(frame.along) * frame.along).normalized();
+  frame.depth = frame.along.cross(frame.across);
+  return frame;
+}
 
 // A part's outline in the image: the convex hull of its two end ellipses, sampled at
 // kOutlineSamples points each. `visible` is false when any point is behind the camera.
