@@ -137,20 +137,27 @@ void touchDown(const KinematicMap& map, Vector5& q) {
   FAIL() << "could not put the swing foot on the ground";
 }
 
+// A random state just before a heel strike: legs about a stride apart with random rates, the
+// knees on their limits by the trial's number, the swing foot turned down onto the ground.
+WalkerState stateAtTouchDown(const KinematicMap& map, RandomStates& random, int trial, double stance_foot_x) {
+  std::uniform_real_distribution<double> small(-0.15, 0.15);
+  WalkerState s;
+  s.q << small(random.rng), -0.3 + small(random.rng), -0.35 + small(random.rng), 0.3 + small(random.rng),
+      0.2 + small(random.rng);
+  s.qdot = random.rates();
+  s.stance_foot_x = stance_foot_x;
+  s.knee_on_limit = {trial % 2 == 0, trial % 3 == 0};
+  if (s.knee_on_limit[0]) s.q[kStanceShank] = s.q[kStanceThigh];
+  if (s.knee_on_limit[1]) s.q[kSwingShank] = s.q[kSwingThigh];
+  touchDown(map, s.q);
+  return s;
+}
+
 TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
   const KinematicMap map = kneedWalkerMap(kPerson);
   RandomStates random(3);
-  std::uniform_real_distribution<double> small(-0.15, 0.15);
   for (int trial = 0; trial < 40; ++trial) {
-    WalkerState before;
-    before.q << small(random.rng), -0.3 + small(random.rng), -0.35 + small(random.rng),
-        0.3 + small(random.rng), 0.2 + small(random.rng);
-    before.qdot = random.rates();
-    before.stance_foot_x = 0.2;
-    before.knee_on_limit = {trial % 2 == 0, trial % 3 == 0};
-    if (before.knee_on_limit[0]) before.q[kStanceShank] = before.q[kStanceThigh];
-    if (before.knee_on_limit[1]) before.q[kSwingShank] = before.q[kSwingThigh];
-    touchDown(map, before.q);
+    const WalkerState before = stateAtTouchDown(map, random, trial, 0.2);
     const Point contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
                           Point(0, map.foot_radius);
     const double h_before =
@@ -177,20 +184,12 @@ TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
 // (With the impulse's moment the wrong way round, the change has the wrong sign: issue 15.)
 TEST(WalkerDynamics, ToeOffImpulseChangesAngularMomentumByItsMoment) {
   const KinematicMap map = kneedWalkerMap(kPerson);
-  RandomStates random(3);  // the states of the test above, whose swing foot can be put on the ground
+  RandomStates random(3);  // the states of the test above
   std::mt19937 pushes(9);
-  std::uniform_real_distribution<double> small(-0.15, 0.15), push(5.0, 40.0);  // N·s
+  std::uniform_real_distribution<double> push(5.0, 40.0);  // N·s
   double worst = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    WalkerState before;
-    before.q << small(random.rng), -0.3 + small(random.rng), -0.35 + small(random.rng),
-        0.3 + small(random.rng), 0.2 + small(random.rng);
-    before.qdot = random.rates();
-    before.stance_foot_x = -0.1;
-    before.knee_on_limit = {trial % 2 == 0, trial % 3 == 0};
-    if (before.knee_on_limit[0]) before.q[kStanceShank] = before.q[kStanceThigh];
-    if (before.knee_on_limit[1]) before.q[kSwingShank] = before.q[kSwingThigh];
-    touchDown(map, before.q);
+    const WalkerState before = stateAtTouchDown(map, random, trial, -0.1);
     const Point new_contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
                               Point(0, map.foot_radius);
     const Point old_contact = stanceFootCentre(map, before.q, before.stance_foot_x) - Point(0, map.foot_radius);
