@@ -35,6 +35,7 @@
 #include <boost/make_shared.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <map>
 #include <memory>
@@ -261,6 +262,16 @@ void TrackerNodelet::onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box)
 
 void TrackerNodelet::onReconfigure(TrackerConfig& config, uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
+  // dynamic_reconfigure clamps to the ranges but lets NaN through: a NaN keeps the value in force.
+  if (!std::isfinite(config.prior_noise_scale)) {
+    NODELET_WARN("reconfigure: prior_noise_scale must be a finite number in [0, 100]; kept %g", live_.prior_noise_scale);
+    config.prior_noise_scale = live_.prior_noise_scale;
+  }
+  if (!std::isfinite(config.particle_cloud_interval_s)) {
+    NODELET_WARN("reconfigure: particle_cloud_interval_s must be a finite number in [0, 3600]; kept %g",
+                 live_.particle_cloud_interval_s);
+    config.particle_cloud_interval_s = live_.particle_cloud_interval_s;
+  }
   if (config.num_particles != live_.num_particles || config.prior_noise_scale != live_.prior_noise_scale)
     restart_requested_ = true;
   if (config.restart) restart_requested_ = true;

@@ -117,7 +117,13 @@ kw::synthetic::SyntheticWalk synthesize(const Settings& s, const kw::synthetic::
   norm.fps = options.fps;
   norm.person_height_m = options.person_height_m;
   norm.seed = options.seed;
-  return kw::synthetic::synthesizeNormWalk(kw::gait::loadGaitNorms(s.norms), proportions, norm);
+  kw::gait::GaitNorms norms;
+  try {
+    norms = kw::gait::loadGaitNorms(s.norms);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(std::string("--norms: ") + e.what());
+  }
+  return kw::synthetic::synthesizeNormWalk(norms, proportions, norm);
 }
 
 // Mean step length over the walk's whole steps (heel strike to heel strike), m; 0 if fewer than two.

@@ -221,6 +221,13 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
   reconfigure(dynamic_reconfigure::DoubleParameter(), &dynamic_reconfigure::Config::doubles, "prior_noise_scale", 0.5);
   ASSERT_TRUE(send(10.65));
   EXPECT_NE(last.message.find("(1/"), std::string::npos) << "a new noise scale did not start over: " << last.message;
+  // NaN is no noise scale: the one in force stays (and nothing starts over).
+  const dynamic_reconfigure::Config kept = reconfigure(dynamic_reconfigure::DoubleParameter(),
+                                                       &dynamic_reconfigure::Config::doubles, "prior_noise_scale", std::nan(""));
+  for (const dynamic_reconfigure::DoubleParameter& d : kept.doubles)
+    if (d.name == "prior_noise_scale") EXPECT_EQ(d.value, 0.5) << "NaN was taken";
+  ASSERT_TRUE(send(10.75));
+  EXPECT_NE(last.message.find("(2/"), std::string::npos) << "NaN started over: " << last.message;
 }
 
 TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
