@@ -156,6 +156,7 @@ WalkerState stateAtTouchDown(const KinematicMap& map, RandomStates& random, int 
 TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
   const KinematicMap map = kneedWalkerMap(kPerson);
   RandomStates random(3);
+  double worst = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const WalkerState before = stateAtTouchDown(map, random, trial, 0.2);
     const Point contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
@@ -164,7 +165,9 @@ TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
         angularMomentum(map, before.q, before.qdot, before.stance_foot_x, contact);
     const WalkerState after = afterHeelStrike(map, before, 0.0);
     const double h_after = angularMomentum(map, after.q, after.qdot, after.stance_foot_x, contact);
-    EXPECT_NEAR(h_after, h_before, 1e-9 * std::abs(h_before)) << "trial " << trial;
+    worst = std::max(worst, std::abs(h_after - h_before) / std::abs(h_before));
+    // Measured 9e-15 worst: the impact is one linear solve, exact to rounding.
+    EXPECT_NEAR(h_after, h_before, 1e-12 * std::abs(h_before)) << "trial " << trial;
     // The new stance foot is where the swing foot was, and the legs swapped.
     EXPECT_NEAR(std::abs(stanceFootCentre(map, after.q, after.stance_foot_x) -
                          (contact + Point(0, map.foot_radius))),
@@ -176,6 +179,7 @@ TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
               mechanicalEnergy(map, kPerson.gravity, 0, before.q, before.qdot,
                                before.stance_foot_x) + 1e-9);
   }
+  std::cout << "angular momentum about the new contact: worst relative change " << worst << "\n";
 }
 
 // With a toe-off impulse ι (eq. 5), the angular momentum about the new contact changes by

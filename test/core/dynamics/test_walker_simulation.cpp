@@ -40,7 +40,8 @@ TEST(WalkerSimulation, TorquesChangeEnergyByExactlyTheirWork) {
   ASSERT_EQ(report.heel_strikes + report.knee_limit_events, 0) << "the window must hold no event";
   ASSERT_FALSE(report.fell);
   const double change = sim.mechanicalEnergy(controls, s) - e0;
-  std::cout << "energy change " << change << " J, work " << integrals.work << " J\n";
+  std::cout << "energy change " << change << " J, work " << integrals.work << " J, relative difference "
+            << std::abs(change - integrals.work) / std::abs(integrals.work) << "\n";
   EXPECT_GT(std::abs(integrals.work), 1.0) << "the torques should do real work";
   EXPECT_NEAR(change, integrals.work, 1e-8 * std::abs(integrals.work));
 }
@@ -131,7 +132,8 @@ TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
             << " rad\n";
   EXPECT_GT(heel_strikes, 150) << "the test must exercise many strides";
   EXPECT_GT(knee_events, 150);
-  EXPECT_GE(worst, -1e-6);
+  // Measured −5.6e-17 rad: eq. 6 and the projection put a knee on its limit to rounding.
+  EXPECT_GE(worst, -1e-12);
 }
 
 TEST(WalkerSimulation, AnyFrameIntervalGivesTheSameMotion) {

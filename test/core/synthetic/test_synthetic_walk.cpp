@@ -98,7 +98,9 @@ TEST(SyntheticWalk, StanceFootDoesNotSkate) {
     std::cout << "slope " << slope << ": " << stances << " heel strikes, worst skate over a stance "
               << worst * 1e3 << " mm, foot centre off its height by " << worst_height * 1e3 << " mm\n";
     EXPECT_GE(stances, 6);
-    EXPECT_LT(worst, 1e-3);
+    // Measured 1.8e-14 m level (the rolling contact is exact) and 0.13 mm at 4.3° (the walker
+    // rolls in its slope frame; the body model's foot is placed on the level ground plane).
+    EXPECT_LT(worst, slope == 0 ? 1e-9 : 1e-3);
     // Exact on the level; on a slope, moving the body over the foot along the walk moves the
     // walker's ground by tan γ of that (measured 0.13 mm over 6 s at 4.3°).
     EXPECT_LT(worst_height, slope == 0 ? 1e-9 : 5e-4);
@@ -126,7 +128,7 @@ TEST(SyntheticWalk, ProjectedJointsAgreeWithOpenCv) {
     worst = std::max(worst, (*pixel - Eigen::Vector2d(expected[i].x, expected[i].y)).norm());
   }
   std::cout << points.size() << " joints; worst difference " << worst << " px\n";
-  EXPECT_LT(worst, 1e-6);
+  EXPECT_LT(worst, 1e-10);  // measured 3.4e-13 px: see Camera.ProjectionAgreesWithOpenCv*
 }
 
 TEST(SyntheticWalk, BadOptionsAreRefusedNamingTheField) {

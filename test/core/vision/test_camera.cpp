@@ -49,7 +49,9 @@ void expectAgreesWithOpenCv(const Camera& camera, unsigned seed) {
   }
   std::cout << visible << " points in view, worst difference " << worst << " px\n";
   EXPECT_GT(visible, 200);
-  EXPECT_LT(worst, 1e-6);
+  // Measured 4.9e-13 and 5.1e-13 px (the two calibrations): the same formula as OpenCV's,
+  // evaluated in another order; 1e-10 leaves room for other libm and compiler builds.
+  EXPECT_LT(worst, 1e-10);
 }
 
 TEST(Camera, ProjectionAgreesWithOpenCvOnThePetsCalibration) {
