@@ -18,6 +18,7 @@
 #include <functional>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -84,10 +85,16 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   };
   ros::Subscriber diagnostics_sub;
   std::map<std::string, std::string> diagnostics;  // the tracker's key-values, last seen
+  diagnostic_msgs::DiagnosticStatus tracker_status;  // the tracker's status, last seen
+  std::set<std::string> status_names;  // every status the nodelet's updater publishes
   diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 20, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& d) {
-    for (const diagnostic_msgs::DiagnosticStatus& status : d->status)
-      if (status.name.find("tracker") != std::string::npos)
+    for (const diagnostic_msgs::DiagnosticStatus& status : d->status) {
+      status_names.insert(status.name);
+      if (status.name.find(": tracker") != std::string::npos) {
+        tracker_status = status;
         for (const diagnostic_msgs::KeyValue& kv : status.values) diagnostics[kv.key] = kv.value;
+      }
+    }
   });
   const size_t spoil_after = images.size() - 8;  // tracking by then
   for (size_t f = 0; f < images.size(); ++f) {
@@ -116,6 +123,31 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   ASSERT_TRUE(waitFor([&] { return diagnostics["frames skipped (unusable)"] == std::to_string(spoiled.size()); }, 5.0))
       << "/diagnostics says " << diagnostics["frames skipped (unusable)"] << " frames skipped";
   EXPECT_EQ(diagnostics["frames dropped (arrived while busy)"], "0");
+  // The rest of /diagnostics, as an operator reads it: every frame counted once where it went,
+  // the filter's figures, the input topic, a warning that names the last bad frame, and the
+  // rate and latency checks of diagnostic_updater beside the tracker's own status.
+  const size_t sent = images.size() + spoiled.size();
+  EXPECT_EQ(diagnostics["frames received"], std::to_string(sent));
+  EXPECT_EQ(diagnostics["frames processed"], std::to_string(images.size()));
+  EXPECT_EQ(diagnostics["frames answered"], std::to_string(images.size()));
+  EXPECT_EQ(diagnostics["restarts (stamps went back, images changed)"], "0");
+  EXPECT_EQ(diagnostics["particles"], std::to_string(particles));
+  const double ess = std::stod(diagnostics["effective sample size"]);
+  EXPECT_GT(ess, 0.0);
+  EXPECT_LE(ess, particles);
+  EXPECT_GT(std::stod(diagnostics["processing time (s)"]), 0.0);
+  EXPECT_NE(diagnostics["input"].find("image"), std::string::npos) << diagnostics["input"];
+  EXPECT_EQ(tracker_status.level, diagnostic_msgs::DiagnosticStatus::WARN) << "frames were skipped: a warning";
+  // The state of the last answer, then the last bad frame's problem (by this sequence's last
+  // frames the session reports "waiting for a person" again).
+  EXPECT_NE(tracker_status.message.find("; last skipped frame: "), std::string::npos) << tracker_status.message;
+  EXPECT_NE(tracker_status.message.find(spoiled.back().expected), std::string::npos)
+      << "the warning names the last bad frame's problem: " << tracker_status.message;
+  for (const char* check : {"input rate", "output rate", "output latency"}) {
+    bool found = false;
+    for (const std::string& name : status_names) found = found || name.find(check) != std::string::npos;
+    EXPECT_TRUE(found) << "no '" << check << "' status on /diagnostics";
+  }
 
   // The same frames and seed through track_offline (as the nodelet: the background from the
   // first frames, the person found in the image, each frame's filtered estimate).
