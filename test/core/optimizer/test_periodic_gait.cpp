@@ -61,8 +61,8 @@ TEST(PeriodicGait, McGeersPassiveWalkerHasAPeriodicGait) {
             << "\n";
   RecordProperty("step_length_L", std::to_string(gait.stride.step_length));
   RecordProperty("period_natural", std::to_string(gait.stride.duration));
-  // The figures the README quotes for this walker (its shank geometry as in
-  // config/walker_model.yaml): step 0.6968 L, period 2.9607 √(L/g), and the flip eigenvalue
+  // The figures the README quotes for McGeer's walker as modelled here (mcGeerPassiveWalker):
+  // step 0.6968 L, period 2.9607 √(L/g), and the flip eigenvalue
   // −1.381 that makes the cycle unstable, with 0.169 and −0.047. A change of the model's
   // geometry or dynamics moves them: it must be deliberate, and the README updated.
   EXPECT_NEAR(gait.stride.step_length, 0.6968, 0.001);

@@ -98,8 +98,8 @@ TEST(SyntheticWalk, StanceFootDoesNotSkate) {
     std::cout << "slope " << slope << ": " << stances << " heel strikes, worst skate over a stance "
               << worst * 1e3 << " mm, foot centre off its height by " << worst_height * 1e3 << " mm\n";
     EXPECT_GE(stances, 6);
-    // Measured 1.8e-14 m level (the rolling contact is exact) and 0.13 mm at 4.3° (the walker
-    // rolls in its slope frame; the body model's foot is placed on the level ground plane).
+    // Measured 1.8e-14 m level (the rolling contact is exact) and 0.13 mm at 4.3° (as for the
+    // foot's height below: on a slope the walker's ground moves by tan γ along the walk).
     EXPECT_LT(worst, slope == 0 ? 1e-9 : 1e-3);
     // Exact on the level; on a slope, moving the body over the foot along the walk moves the
     // walker's ground by tan γ of that (measured 0.13 mm over 6 s at 4.3°).
