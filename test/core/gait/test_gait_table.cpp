@@ -43,7 +43,9 @@ TEST_P(ShippedGaitTable, CoversThePapersGrid) {
   for (const auto& e : table.entries) feasible += e.feasible;
   std::cout << feasible << " of " << table.grid.size() << " gaits feasible\n";
   RecordProperty("feasible_gaits", feasible);
-  EXPECT_GT(feasible, 0);
+  // The counts the README states for the shipped tables (a table regenerated with fewer gaits
+  // must say so there): 262 free, 102 with the prior's fixed controls.
+  EXPECT_GE(feasible, table.fixed ? 102 : 262);
 }
 
 // Every shipped gait is re-simulated from its stored state and controls: it must be periodic
