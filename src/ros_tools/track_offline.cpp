@@ -4,13 +4,15 @@
 // `frame,stamp,joint,x,y,z` (the synthetic ground truth's format): by default each track's
 // whole MAP state sequence, one particle's path written when the track ends (--lagged: each
 // frame Δs frames later, as the nodelet; --filtered: each frame's best particle at once),
-// optionally an overlay video, and prints the timing.
+// optionally an overlay video and the projected body's image box per frame (for comparing
+// with a person detector's boxes: scripts/box_overlap), and prints the timing.
 //
 //   rosrun kneed_walker track_offline --bag seq.bag --camera seq_camera.yml --init-box 300 200 350 320
 //       --out-csv estimate.csv [--overlay overlay.avi]                                 (one line)
 //   rosrun kneed_walker track_offline --video vtest.avi --camera View_001_camera.yml
 //       --boxes View_001_person_boxes.csv --first-frame 600 --out-csv estimate.csv    (one line)
 #include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
 #include <cv_bridge/cv_bridge.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -192,7 +194,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Tracks a walking person in a bag or video with the Kneed Walker; writes the MAP joints as CSV."};
   std::string bag_path, video_path, camera_path, image_topic = "/camera/image_raw",
               info_topic = "/camera/camera_info", world_frame = "world", out_csv, overlay_path, boxes_path,
-              background_path;
+              background_path, out_boxes;
   std::string table_path = kneed_walker::tools::packageFile("config/prior_gait_table.yaml");
   std::string prior_path = kneed_walker::tools::packageFile("config/prior.yaml");
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
@@ -275,6 +277,9 @@ int main(int argc, char** argv) {
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--out-csv", out_csv, "MAP joints per frame (frame,stamp,joint,x,y,z)")->required();
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
+  app.add_option("--out-boxes", out_boxes,
+                 "the MAP body's image box per frame, as written to --out-csv (frame,x1,y1,x2,y2; px): the "
+                 "bounding box of the projected parts' outlines");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
   options.keep_whole_path = !filtered && !lagged;
@@ -292,11 +297,22 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "track_offline: --out-csv %s: cannot write\n", out_csv.c_str());
     return 1;
   }
+  std::ofstream boxes_csv;
+  if (!out_boxes.empty()) {
+    boxes_csv.open(out_boxes);
+    if (!boxes_csv) {
+      std::fprintf(stderr, "track_offline: --out-boxes %s: cannot write\n", out_boxes.c_str());
+      std::remove(out_csv.c_str());
+      return 1;
+    }
+  }
   cv::VideoWriter overlay;
   auto removeOutputs = [&] {
     csv.close();
+    boxes_csv.close();
     overlay.release();
     std::remove(out_csv.c_str());
+    if (!out_boxes.empty()) std::remove(out_boxes.c_str());
     if (!overlay_path.empty()) std::remove(overlay_path.c_str());
   };
   try {
@@ -391,6 +407,7 @@ int main(int argc, char** argv) {
     }
 
     csv << "frame,stamp,joint,x,y,z\n" << std::fixed << std::setprecision(9);
+    if (boxes_csv.is_open()) boxes_csv << "frame,x1,y1,x2,y2\n" << std::fixed << std::setprecision(2);
     std::vector<int> source_index;  // per session input: the input's frame index
     auto writePose = [&](int input, double input_stamp, const kw::body::BodyPose& pose) {
       for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
@@ -398,6 +415,16 @@ int main(int argc, char** argv) {
         csv << source_index.at(input) << ',' << input_stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
             << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
       }
+      if (!boxes_csv.is_open()) return;
+      kw::vision::BodyOutlines outlines;
+      tracker.project(pose, outlines);
+      Eigen::AlignedBox2d box;
+      for (const kw::vision::PartOutline& part : outlines)
+        if (part.visible)
+          for (int i = 0; i < part.size; ++i) box.extend(part.hull[i]);
+      if (!box.isEmpty())
+        boxes_csv << source_index.at(input) << ',' << box.min().x() << ',' << box.min().y() << ',' << box.max().x()
+                  << ',' << box.max().y() << '\n';
     };
     std::vector<double> total_ms, precompute_ms, particles_ms;
     const bool tty = isatty(STDERR_FILENO);
