@@ -131,6 +131,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("person_height_m", t.person_height_m);
   reader.read("person_mass_kg", t.person_mass_kg);
   reader.read("ground_slope_rad", t.ground_slope_rad);
+  reader.read("min_gait_speed_kmh", t.min_gait_speed_kmh);
+  reader.read("min_gait_step_m", t.min_gait_step_m);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
 

@@ -238,6 +238,12 @@ int main(int argc, char** argv) {
       ->check(FiniteRange(0.0, 20.0));
   app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str()
       ->check(FiniteRange(0.0, 20.0));
+  app.add_option("--min-gait-speed", options.min_gait_speed_kmh,
+                 "slowest gait of the table the particles may walk, km/h (1.5 with --min-gait-step 0.3: the slow "
+                 "walks of strolling people)")
+      ->capture_default_str()->check(FiniteRange(0.0, 20.0));
+  app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
+      ->capture_default_str()->check(FiniteRange(0.0, 3.0));
   app.add_option("--particles", options.num_particles, "particles")->capture_default_str()->check(CLI::Range(1, 1000000));
   app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)")
       ->check(FiniteRange(1e-9, 1e6));

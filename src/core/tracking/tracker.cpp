@@ -49,7 +49,8 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   common::throwIfInvalid("tracker options", validate(options));
   prior::requirePriorTable(table, prior_options);
   // The gaits the particles walk around: the table's feasible gaits at the slope nearest the
-  // ground's, scaled to the person by Froude similarity.
+  // ground's, as fast and long-stepped as the options ask at least, scaled to the person by
+  // Froude similarity.
   const gait::GaitGrid& grid = table.grid;
   int slope = 0;
   for (int s = 1; s < static_cast<int>(grid.slopes_rad.size()); ++s)
@@ -61,6 +62,8 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   for (int i = 0; i < grid.size(); ++i) {
     const auto cell = grid.cell(i);
     if (cell[2] != slope || !table.entries[i].feasible) continue;
+    if (grid.speeds_kmh[cell[0]] < options.min_gait_speed_kmh || grid.step_lengths_m[cell[1]] < options.min_gait_step_m)
+      continue;
     BankGait gait;
     gait.prior = std::make_unique<prior::BodyPrior>(
         prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
@@ -70,7 +73,9 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     bank_.push_back(std::move(gait));
   }
   if (bank_.empty())
-    throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope");
+    throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope from " +
+                                std::to_string(options.min_gait_speed_kmh) + " km/h and " +
+                                std::to_string(options.min_gait_step_m) + " m steps");
   // Neighbours: a stride may move to a gait one grid step away in speed and step length.
   const double speed_step = (grid.speeds_kmh[1] - grid.speeds_kmh[0]) * froude_speed;
   const double length_step = (grid.step_lengths_m[1] - grid.step_lengths_m[0]) * leg_m / grid.referenceLegLength();

@@ -37,6 +37,10 @@ std::vector<std::string> validate(const TrackerOptions& o) {
   checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");
   checkRange(problems, "ground_slope_rad", o.ground_slope_rad, -0.2, 0.2,
              "ground slope, rad, positive uphill");
+  checkRange(problems, "min_gait_speed_kmh", o.min_gait_speed_kmh, 0.0, 20.0,
+             "slowest gait of the table the particles may walk, km/h");
+  checkRange(problems, "min_gait_step_m", o.min_gait_step_m, 0.0, 3.0,
+             "shortest step of the table's gaits the particles may walk, m");
   checkRange(problems, "default_frame_interval_s", o.default_frame_interval_s, 1e-4, 1.0,
              "frame interval used when stamps are unusable, s");
   checkRange(problems, "max_frame_gap_s", o.max_frame_gap_s, o.default_frame_interval_s, 60.0,

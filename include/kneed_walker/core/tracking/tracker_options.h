@@ -26,6 +26,14 @@ struct TrackerOptions {
   double person_height_m = 1.75;  // standing height H, m, [1.0, 2.3]
   double person_mass_kg = 70.0;   // body mass M, kg, [20, 250]
   double ground_slope_rad = 0.0;  // γ, rad, |γ| ≤ 0.2 (≈ 11.5°); positive = uphill
+  // The prior table's gaits the particles may walk around: those at least this fast and with
+  // steps at least this long (the table's axes, for its reference person). The defaults are the
+  // paper's grid (3–7 km/h, 0.5–1.0 m); the shipped tables add slow walks on short steps (down
+  // to 1.5 km/h, 0.3 m), which real people strolling or pausing need (PETS 2009: the demo uses
+  // 1.5 km/h and 0.3 m) and which the synthetic walks (3.5–6.5 km/h) track worse with (README
+  // "The tracker").
+  double min_gait_speed_kmh = 3.0;  // km/h, [0, 20]
+  double min_gait_step_m = 0.5;     // m, [0, 3]
 
   // Frames whose stamp gap is not usable (first frame, equal or backwards stamps) are
   // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
