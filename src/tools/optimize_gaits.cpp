@@ -4,6 +4,7 @@
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
 //                                      [--prior-fixed] [--seed-table config/gait_table.yaml]
+//                                      [--speeds 1.5,2,...,7] [--step-lengths 0.5,...,1]
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
 // config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
@@ -101,10 +102,25 @@ int run(int argc, char** argv) {
       ->check(kneed_walker::tools::FiniteRange(0.1, 3))->capture_default_str();
   app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad")
       ->check(kneed_walker::tools::FiniteRange(-0.5, 0.5))->capture_default_str();
+  std::vector<double> speeds_kmh, step_lengths_m;
+  app.add_option("--speeds", speeds_kmh,
+                 "the grid's speeds, km/h, ascending, comma-separated (default the paper's 3-7 by 0.5; "
+                 "with --resume, the table is carried over to the new grid)")
+      ->delimiter(',')->check(kneed_walker::tools::FiniteRange(0.5, 20));
+  app.add_option("--step-lengths", step_lengths_m,
+                 "the grid's step lengths, m, ascending, comma-separated (default the paper's 0.5-1.0 by 0.1)")
+      ->delimiter(',')->check(kneed_walker::tools::FiniteRange(0.1, 3));
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"}})
+    for (size_t i = 1; i < axis->size(); ++i)
+      if (!((*axis)[i - 1] < (*axis)[i])) {
+        std::fprintf(stderr, "optimize_gaits: %s must be ascending without repeats (%g then %g)\n", name,
+                     (*axis)[i - 1], (*axis)[i]);
+        return 1;
+      }
   threads = kw::common::resolveThreads(threads);
   kw::dynamics::BodyProportions proportions;
   try {
@@ -145,13 +161,20 @@ int run(int argc, char** argv) {
 
   kw::optimizer::GaitOptimizerOptions options;
   kw::gait::GaitTable table;
+  // The grid asked for: the paper's, or the table's own when resuming, with the axes given.
+  auto requestedGrid = [&](kw::gait::GaitGrid grid) {
+    if (!speeds_kmh.empty()) grid.speeds_kmh = speeds_kmh;
+    if (!step_lengths_m.empty()) grid.step_lengths_m = step_lengths_m;
+    return grid;
+  };
   if (resume && std::filesystem::exists(out)) {
     table = kw::gait::loadGaitTable(out, proportions);
+    table = kw::gait::regridded(table, requestedGrid(table.grid));
     if (retry_failed)
       for (auto& e : table.entries)
         if (e.solved && !e.feasible) e.solved = false;
   } else {
-    table.grid = kw::gait::GaitGrid::paper();
+    table.grid = requestedGrid(kw::gait::GaitGrid::paper());
     table.grid.leg_length_per_height = proportions.leg_length_per_height;
     table.body = proportions;
     table.entries.resize(table.grid.size());

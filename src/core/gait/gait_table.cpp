@@ -220,6 +220,37 @@ int keepLowerEffort(GaitTable& table, const GaitTable& other) {
   return taken;
 }
 
+GaitTable regridded(const GaitTable& table, const GaitGrid& grid) {
+  const GaitGrid& from = table.grid;
+  if (from.reference_height_m != grid.reference_height_m ||
+      from.leg_length_per_height != grid.leg_length_per_height || from.gravity != grid.gravity)
+    throw std::invalid_argument("regridded: the grids are for different reference people or gravity");
+  // The index of each of `to`'s values in `from`, or -1.
+  auto match = [](const std::vector<double>& from_axis, const std::vector<double>& to_axis) {
+    std::vector<int> indices;
+    for (const double x : to_axis) {
+      const auto it = std::find_if(from_axis.begin(), from_axis.end(),
+                                   [x](double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); });
+      indices.push_back(it == from_axis.end() ? -1 : static_cast<int>(it - from_axis.begin()));
+    }
+    return indices;
+  };
+  const std::vector<int> speeds = match(from.speeds_kmh, grid.speeds_kmh);
+  const std::vector<int> steps = match(from.step_lengths_m, grid.step_lengths_m);
+  const std::vector<int> slopes = match(from.slopes_rad, grid.slopes_rad);
+  GaitTable result;
+  result.grid = grid;
+  result.body = table.body;
+  result.fixed = table.fixed;
+  result.entries.resize(grid.size());
+  for (int i = 0; i < grid.size(); ++i) {
+    const auto c = grid.cell(i);
+    if (speeds[c[0]] >= 0 && steps[c[1]] >= 0 && slopes[c[2]] >= 0)
+      result.entries[i] = table.entries[from.index(speeds[c[0]], steps[c[1]], slopes[c[2]])];
+  }
+  return result;
+}
+
 Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
                      double slope_rad) {
   const GaitGrid& g = table.grid;

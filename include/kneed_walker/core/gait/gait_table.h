@@ -79,6 +79,11 @@ GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions
 // tables' grids, body models or fixed controls differ.
 int keepLowerEffort(GaitTable& table, const GaitTable& other);
 
+// `table` on another grid (a grid extended to slower speeds, say): each of its entries whose grid
+// point is also one of `grid`'s is kept, the other points of `grid` are unsolved. Throws
+// std::invalid_argument when the grids' reference person or gravity differ.
+GaitTable regridded(const GaitTable& table, const GaitGrid& grid);
+
 // The gait at any (speed, step length, slope) inside the grid: controls and start state
 // interpolated trilinearly between the eight surrounding feasible gaits (dimensionless). Throws
 // std::out_of_range naming the axis for a target outside the grid, or the missing corner gait.
