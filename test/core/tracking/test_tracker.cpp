@@ -16,9 +16,9 @@ const test::RenderedWalk& scene() {
   return walk;
 }
 
-std::unique_ptr<Tracker> makeTracker(int particles, int threads, double mass_kg = 70.0) {
+std::unique_ptr<Tracker> makeTracker(int particles, int threads, double mass_kg = 70.0,
+                                     TrackerOptions options = {}) {
   const test::RenderedWalk& s = scene();
-  TrackerOptions options;
   options.person_mass_kg = mass_kg;
   options.num_particles = particles;
   options.resample_ess_threshold = particles / 10.0;
@@ -54,6 +54,26 @@ double track(Tracker& tracker, std::vector<TrackEstimate>* estimates = nullptr) 
 
 // A guard that fails when tracking breaks (the accuracy itself is measured by
 // scripts/evaluate_sequences on the shipped sequences): 800 particles follow a 2 s walk.
+// The particles walk the table's gaits from min_gait_speed_kmh and min_gait_step_m up: by
+// default the paper's grid, and with 1.5 km/h and 0.3 m also the shipped table's slow walks
+// (level: 1.5 km/h on 0.3-0.4 m, 2-2.5 km/h on 0.3-0.5 m, 3 km/h on 0.4 m: 10 gaits). A range
+// with no gait is refused, naming it.
+TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
+  const int papers = makeTracker(10, 1)->gaitCount();
+  TrackerOptions slow;
+  slow.min_gait_speed_kmh = 1.5;
+  slow.min_gait_step_m = 0.3;
+  EXPECT_EQ(makeTracker(10, 1, 70.0, slow)->gaitCount(), papers + 10);
+  TrackerOptions none;
+  none.min_gait_speed_kmh = 19;
+  try {
+    makeTracker(10, 1, 70.0, none);
+    FAIL() << "a range without gaits was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no feasible gait at the ground's slope from 19"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Tracker, FollowsASyntheticWalk) {
   const auto tracker = makeTracker(800, 0);
   std::vector<TrackEstimate> estimates;
