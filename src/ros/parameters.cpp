@@ -133,6 +133,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("ground_slope_rad", t.ground_slope_rad);
   reader.read("min_gait_speed_kmh", t.min_gait_speed_kmh);
   reader.read("min_gait_step_m", t.min_gait_step_m);
+  reader.read("person_breadth_scale", t.person_breadth_scale);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
 

@@ -242,6 +242,9 @@ int main(int argc, char** argv) {
                  "slowest gait of the table the particles may walk, km/h (1.5 with --min-gait-step 0.3: the slow "
                  "walks of strolling people)")
       ->capture_default_str()->check(FiniteRange(0.0, 20.0));
+  app.add_option("--breadth", options.person_breadth_scale,
+                 "the person's torso and thighs this many times as broad as the body model's (a coat, arms)")
+      ->capture_default_str()->check(FiniteRange(0.5, 3.0));
   app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
       ->capture_default_str()->check(FiniteRange(0.0, 3.0));
   app.add_option("--particles", options.num_particles, "particles")->capture_default_str()->check(CLI::Range(1, 1000000));

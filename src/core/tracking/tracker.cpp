@@ -76,6 +76,12 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope from " +
                                 std::to_string(options.min_gait_speed_kmh) + " km/h and " +
                                 std::to_string(options.min_gait_step_m) + " m steps");
+  shape_ = bank_.front().prior->shape();
+  for (const body::BodyPart part : {body::kTorsoPart, body::kLeftThighPart, body::kRightThighPart}) {
+    body::PartShape& p = shape_.parts[part];
+    for (double* breadth : {&p.proximal_width_m, &p.proximal_depth_m, &p.distal_width_m, &p.distal_depth_m})
+      *breadth *= options.person_breadth_scale;
+  }
   // Neighbours: a stride may move to a gait one grid step away in speed and step length.
   const double speed_step = (grid.speeds_kmh[1] - grid.speeds_kmh[0]) * froude_speed;
   const double length_step = (grid.step_lengths_m[1] - grid.step_lengths_m[0]) * leg_m / grid.referenceLegLength();
@@ -107,7 +113,7 @@ body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
   return onGround(bank_[particle.gait].prior->pose(particle.body), particle);
 }
 
-const body::BodyShape& Tracker::shape() const { return bank_.front().prior->shape(); }
+const body::BodyShape& Tracker::shape() const { return shape_; }
 
 void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const {
   vision::projectBodyParts(camera_, pose, shape(), outlines);

@@ -74,6 +74,25 @@ TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
   }
 }
 
+// person_breadth_scale broadens the projected torso and thighs (width and depth), nothing else.
+TEST(Tracker, TheBreadthScaleBroadensTorsoAndThighsOnly) {
+  const body::BodyShape plain = makeTracker(10, 1)->shape();
+  TrackerOptions broad;
+  broad.person_breadth_scale = 1.5;
+  const body::BodyShape wide = makeTracker(10, 1, 70.0, broad)->shape();
+  for (int part = 0; part < body::kNumBodyParts; ++part) {
+    const bool scaled = part == body::kTorsoPart || part == body::kLeftThighPart || part == body::kRightThighPart;
+    const double factor = scaled ? 1.5 : 1.0;
+    const body::PartShape &a = plain.parts[part], &b = wide.parts[part];
+    EXPECT_DOUBLE_EQ(b.proximal_width_m, factor * a.proximal_width_m) << body::partName(body::BodyPart(part));
+    EXPECT_DOUBLE_EQ(b.proximal_depth_m, factor * a.proximal_depth_m) << body::partName(body::BodyPart(part));
+    EXPECT_DOUBLE_EQ(b.distal_width_m, factor * a.distal_width_m) << body::partName(body::BodyPart(part));
+    EXPECT_DOUBLE_EQ(b.distal_depth_m, factor * a.distal_depth_m) << body::partName(body::BodyPart(part));
+  }
+  EXPECT_EQ(wide.hip_width_m, plain.hip_width_m);
+  EXPECT_EQ(wide.foot_length_m, plain.foot_length_m);
+}
+
 TEST(Tracker, FollowsASyntheticWalk) {
   const auto tracker = makeTracker(800, 0);
   std::vector<TrackEstimate> estimates;

@@ -30,13 +30,15 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.person_height_m = std::numeric_limits<double>::quiet_NaN();
   options.min_gait_speed_kmh = std::numeric_limits<double>::infinity();
   options.min_gait_step_m = -0.1;
+  options.person_breadth_scale = 0.2;
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 5u);
+  EXPECT_EQ(problems.size(), 6u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
   EXPECT_TRUE(mentions(problems, "min_gait_speed_kmh = inf"));
   EXPECT_TRUE(mentions(problems, "min_gait_step_m = -0.1"));
+  EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
 }
 
 TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {

@@ -151,6 +151,7 @@ class Tracker {
   TrackerOptions options_;
   vision::LikelihoodOptions likelihood_;
   std::vector<BankGait> bank_;
+  body::BodyShape shape_;  // the gaits' body shape, with the options' breadth
   vision::BackgroundModel background_;
   vision::AppearanceModel appearance_;
   std::unique_ptr<ParticleFilter<TrackerParticle>> filter_;

@@ -34,6 +34,10 @@ struct TrackerOptions {
   // "The tracker").
   double min_gait_speed_kmh = 3.0;  // km/h, [0, 20]
   double min_gait_step_m = 0.5;     // m, [0, 3]
+  // The projected torso's and thighs' breadth (width and depth) times this: a person in a coat,
+  // or with arms swinging beside the torso, which the body model does not have, is broader than
+  // its bare torso (Winter's proportions). [0.5, 3]
+  double person_breadth_scale = 1.0;
 
   // Frames whose stamp gap is not usable (first frame, equal or backwards stamps) are
   // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
