@@ -286,6 +286,12 @@ int main(int argc, char** argv) {
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--out-csv", out_csv, "MAP joints per frame (frame,stamp,joint,x,y,z)")->required();
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
+  std::string strip_path;
+  std::vector<int> strip_frames;
+  app.add_option("--strip", strip_path,
+                 "a picture of the overlay at --strip-frames, each cropped around the tracked body, side by side (PNG)");
+  app.add_option("--strip-frames", strip_frames, "frames for --strip, comma-separated")
+      ->delimiter(',')->check(CLI::NonNegativeNumber);
   app.add_option("--out-boxes", out_boxes,
                  "the MAP body's image box per frame, as written to --out-csv (frame,x1,y1,x2,y2; px): the "
                  "bounding box of the projected parts' outlines");
@@ -295,6 +301,10 @@ int main(int argc, char** argv) {
   if (guess.min_speed_kmh > guess.max_speed_kmh) {
     std::fprintf(stderr, "track_offline: --min-speed %g exceeds --max-speed %g\n", guess.min_speed_kmh,
                  guess.max_speed_kmh);
+    return 1;
+  }
+  if (!strip_path.empty() && strip_frames.empty()) {
+    std::fprintf(stderr, "track_offline: --strip needs --strip-frames\n");
     return 1;
   }
   if (!init_stance.empty()) guess.stance_leg = init_stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
@@ -315,6 +325,16 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  if (!strip_path.empty()) {
+    if (!std::ofstream(strip_path)) {
+      std::fprintf(stderr, "track_offline: --strip %s: cannot write\n", strip_path.c_str());
+      std::remove(out_csv.c_str());
+      if (!out_boxes.empty()) std::remove(out_boxes.c_str());
+      return 1;
+    }
+    std::remove(strip_path.c_str());
+  }
+  const bool draw = !overlay_path.empty() || !strip_path.empty();  // overlay pictures are drawn
   cv::VideoWriter overlay;
   auto removeOutputs = [&] {
     csv.close();
@@ -323,6 +343,7 @@ int main(int argc, char** argv) {
     std::remove(out_csv.c_str());
     if (!out_boxes.empty()) std::remove(out_boxes.c_str());
     if (!overlay_path.empty()) std::remove(overlay_path.c_str());
+    if (!strip_path.empty()) std::remove(strip_path.c_str());
   };
   try {
     std::unique_ptr<FrameSource> source;
@@ -418,6 +439,17 @@ int main(int argc, char** argv) {
     csv << "frame,stamp,joint,x,y,z\n" << std::fixed << std::setprecision(9);
     if (boxes_csv.is_open()) boxes_csv << "frame,x1,y1,x2,y2\n" << std::fixed << std::setprecision(2);
     std::vector<int> source_index;  // per session input: the input's frame index
+    // The bounding box of a pose's projected parts' outlines (the ones the overlay draws), px.
+    auto imageBox = [&](const kw::body::BodyPose& pose) {
+      kw::vision::BodyOutlines outlines;
+      tracker.project(pose, outlines);
+      Eigen::AlignedBox2d box;
+      for (const kw::vision::PartOutline& part : outlines)
+        if (part.visible)
+          for (int i = 0; i < part.size; ++i) box.extend(part.hull[i]);
+      return box;
+    };
+    std::map<int, cv::Mat> strip_pictures;  // by frame: the overlay cropped around the body
     auto writePose = [&](int input, double input_stamp, const kw::body::BodyPose& pose) {
       for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
         const Eigen::Vector3d& p = pose.joints[j];
@@ -425,12 +457,7 @@ int main(int argc, char** argv) {
             << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
       }
       if (!boxes_csv.is_open()) return;
-      kw::vision::BodyOutlines outlines;
-      tracker.project(pose, outlines);
-      Eigen::AlignedBox2d box;
-      for (const kw::vision::PartOutline& part : outlines)
-        if (part.visible)
-          for (int i = 0; i < part.size; ++i) box.extend(part.hull[i]);
+      const Eigen::AlignedBox2d box = imageBox(pose);
       if (!box.isEmpty())
         boxes_csv << source_index.at(input) << ',' << box.min().x() << ',' << box.min().y() << ',' << box.max().x()
                   << ',' << box.max().y() << '\n';
@@ -447,7 +474,7 @@ int main(int argc, char** argv) {
       for (const kw::tracking::MapFrame& m : a.map_frames)
         if (!filtered) writePose(m.input, m.stamp_s, m.pose);
       cv::Mat picture;
-      if (!overlay_path.empty()) {
+      if (draw) {
         picture = unanswered.at(a.input);
         unanswered.erase(a.input);
       }
@@ -460,7 +487,7 @@ int main(int argc, char** argv) {
         if (filtered) writePose(a.input, a.stamp_s, estimate.pose);
         if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist]))
           last_seen_px = cv::Point2d(px->x(), px->y());
-        if (!overlay_path.empty()) {
+        if (draw) {
           std::vector<Eigen::Vector2f> cloud;
           if (latest && tracker.started())
             for (const auto& p : tracker.particles())
@@ -472,14 +499,32 @@ int main(int argc, char** argv) {
         }
       }
       last_lost = a.state == kw::tracking::SessionState::kLost;
-      if (!overlay_path.empty()) {
+      if (draw) {
         cv::putText(picture,
                     cv::format("frame %d  %s", source_index.at(a.input), kw::tracking::stateName(a.state)) +
                         (a.estimate ? cv::format("  N_eff %.0f  %.1f km/h", a.estimate->effective_sample_size,
                                                  a.estimate->speed_kmh)
                                     : std::string()),
                     {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
-        overlay.write(picture);
+        if (!overlay_path.empty()) overlay.write(picture);
+        const int frame_number = source_index.at(a.input);
+        if (a.estimate && std::find(strip_frames.begin(), strip_frames.end(), frame_number) != strip_frames.end()) {
+          // A portrait crop 1.4 body heights tall around the body, 240 px tall in the strip.
+          const Eigen::AlignedBox2d box = imageBox(a.estimate->pose);
+          if (!box.isEmpty()) {
+            const double height = 1.4 * box.sizes().y(), width = 0.75 * height;
+            const cv::Rect crop = cv::Rect(cv::Point(cvRound(box.center().x() - width / 2), cvRound(box.center().y() - height / 2)),
+                                           cv::Size(cvRound(width), cvRound(height))) &
+                                  cv::Rect(0, 0, picture.cols, picture.rows);
+            if (crop.area() > 0) {
+              cv::Mat tile;
+              cv::resize(picture(crop), tile, cv::Size(cvRound(240.0 * crop.width / crop.height), 240), 0, 0, cv::INTER_CUBIC);
+              cv::putText(tile, std::to_string(frame_number), {4, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1,
+                          cv::LINE_AA);
+              strip_pictures[frame_number] = tile;
+            }
+          }
+        }
       }
     };
     cv::Mat frame;
@@ -512,7 +557,7 @@ int main(int argc, char** argv) {
         continue;
       }
       source_index.push_back(index);
-      if (!overlay_path.empty()) unanswered[session.framesFed() - 1] = frame.clone();
+      if (draw) unanswered[session.framesFed() - 1] = frame.clone();
       for (size_t i = 0; i < answers.size(); ++i) answer(answers[i], i + 1 == answers.size());
       if (!answers.empty() && answers.back().estimate && answered > 1) {
         const kw::tracking::TrackerTiming& timing = tracker.timing();
@@ -535,6 +580,17 @@ int main(int argc, char** argv) {
     for (const kw::tracking::MapFrame& m : session.finish())
       if (!filtered) writePose(m.input, m.stamp_s, m.pose);
     if (tracked == 0) throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
+    if (!strip_path.empty()) {
+      if (strip_pictures.empty()) throw std::runtime_error("--strip-frames: none of them was tracked");
+      std::vector<cv::Mat> tiles;
+      for (const auto& [frame_number, tile] : strip_pictures) {
+        if (!tiles.empty()) tiles.push_back(cv::Mat(240, 4, CV_8UC3, cv::Scalar(255, 255, 255)));
+        tiles.push_back(tile);
+      }
+      cv::Mat strip;
+      cv::hconcat(tiles, strip);
+      if (!cv::imwrite(strip_path, strip)) throw std::runtime_error("--strip " + strip_path + ": cannot write the picture");
+    }
     std::printf("frames=%d tracked_frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d "
                 "particles=%d\n",
                 answered, tracked, skipped, lost, std::max(0, starts - 1), resampled, options.num_particles);
