@@ -134,6 +134,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("min_gait_speed_kmh", t.min_gait_speed_kmh);
   reader.read("min_gait_step_m", t.min_gait_step_m);
   reader.read("person_breadth_scale", t.person_breadth_scale);
+  reader.read("gait_change_probability", t.gait_change_probability);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
 

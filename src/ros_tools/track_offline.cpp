@@ -242,6 +242,9 @@ int main(int argc, char** argv) {
                  "slowest gait of the table the particles may walk, km/h (1.5 with --min-gait-step 0.3: the slow "
                  "walks of strolling people)")
       ->capture_default_str()->check(FiniteRange(0.0, 20.0));
+  app.add_option("--gait-change", options.gait_change_probability,
+                 "probability that a new stride walks a neighbouring gait of the table (speed changes)")
+      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
   app.add_option("--breadth", options.person_breadth_scale,
                  "the person's torso and thighs this many times as broad as the body model's (a coat, arms)")
       ->capture_default_str()->check(FiniteRange(0.5, 3.0));

@@ -24,9 +24,6 @@ double msSince(Clock::time_point start) {
 // the best particle explains the image worse than the background does.
 constexpr int kLostAfterFrames = 3;
 
-// The probability that a particle's new stride walks around a neighbouring gait of the table.
-constexpr double kGaitChangeProbability = 0.3;
-
 }  // namespace
 
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
@@ -321,7 +318,7 @@ double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random)
   // neighbouring gait of the table (its stride samples are drawn from that gait's optimum).
   const std::vector<int>& neighbours = bank_[p.gait].neighbours;
   if (p.body.walker.walker.heel_strikes != p.body.walker.stride_of_means && !neighbours.empty() &&
-      std::bernoulli_distribution(kGaitChangeProbability)(random))
+      std::bernoulli_distribution(options_.gait_change_probability)(random))
     p.gait = neighbours[std::uniform_int_distribution<int>(0, static_cast<int>(neighbours.size()) - 1)(random)];
   body::BodyPose pose;
   const bool fell = bank_[p.gait].prior->transition(p.body, dt, random, pose).fell;

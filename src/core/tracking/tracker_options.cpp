@@ -39,6 +39,8 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "ground slope, rad, positive uphill");
   checkRange(problems, "min_gait_speed_kmh", o.min_gait_speed_kmh, 0.0, 20.0,
              "slowest gait of the table the particles may walk, km/h");
+  checkRange(problems, "gait_change_probability", o.gait_change_probability, 0.0, 1.0,
+             "probability that a new stride walks a neighbouring gait");
   checkRange(problems, "person_breadth_scale", o.person_breadth_scale, 0.5, 3.0,
              "factor on the torso's and thighs' breadth");
   checkRange(problems, "min_gait_step_m", o.min_gait_step_m, 0.0, 3.0,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <set>
 
 #include "rendered_walk.h"
 
@@ -91,6 +92,26 @@ TEST(Tracker, TheBreadthScaleBroadensTorsoAndThighsOnly) {
   }
   EXPECT_EQ(wide.hip_width_m, plain.hip_width_m);
   EXPECT_EQ(wide.foot_length_m, plain.foot_length_m);
+}
+
+// gait_change_probability: at 0 every stride walks the gait its particle started on, at 1 every
+// new stride moves to a neighbouring gait. Started on the 4.5 km/h gaits alone, the MAP
+// particle's gait speed stays 4.5 km/h at 0 and leaves it at 1 (after the first heel strikes).
+TEST(Tracker, GaitChangeProbabilityIsHowOftenAStrideMovesToANeighbouringGait) {
+  auto speeds = [](double probability) {
+    TrackerOptions options;
+    options.gait_change_probability = probability;
+    const auto tracker = makeTracker(200, 1, 70.0, options);
+    const test::RenderedWalk& s = scene();
+    InitialGuess guess = coarseStart();
+    guess.min_speed_kmh = guess.max_speed_kmh = 4.5;
+    std::set<double> seen;
+    seen.insert(tracker->start(s.frames[0], 0.0, guess).speed_kmh);
+    for (size_t f = 1; f < s.frames.size(); ++f) seen.insert(tracker->track(s.frames[f], 0.1 * f).speed_kmh);
+    return seen;
+  };
+  EXPECT_EQ(speeds(0.0), std::set<double>{4.5});
+  EXPECT_GT(speeds(1.0).size(), 1u);
 }
 
 TEST(Tracker, FollowsASyntheticWalk) {

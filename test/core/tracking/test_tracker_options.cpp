@@ -31,14 +31,16 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.min_gait_speed_kmh = std::numeric_limits<double>::infinity();
   options.min_gait_step_m = -0.1;
   options.person_breadth_scale = 0.2;
+  options.gait_change_probability = std::numeric_limits<double>::quiet_NaN();
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 6u);
+  EXPECT_EQ(problems.size(), 7u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
   EXPECT_TRUE(mentions(problems, "min_gait_speed_kmh = inf"));
   EXPECT_TRUE(mentions(problems, "min_gait_step_m = -0.1"));
   EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
+  EXPECT_TRUE(mentions(problems, "gait_change_probability = nan"));
 }
 
 TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {
