@@ -163,6 +163,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("background_frames", session.background_frames);
   reader.read("heading_frames", session.heading_frames);
   reader.read("find_people", session.find_people);
+  reader.read("min_start_speed_kmh", session.min_start_speed_kmh);
+  reader.read("max_start_speed_kmh", session.max_start_speed_kmh);
   for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
   if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
     reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +

@@ -22,6 +22,10 @@ std::vector<std::string> validate(const SessionOptions& o) {
   if (!(std::isfinite(d.min_height_m) && std::isfinite(d.max_height_m) && 0 < d.min_height_m &&
         d.min_height_m < d.max_height_m))
     problems.push_back("detector.min_height_m and max_height_m must be finite with 0 < min < max");
+  if (!(std::isfinite(o.min_start_speed_kmh) && std::isfinite(o.max_start_speed_kmh) && 0 <= o.min_start_speed_kmh &&
+        o.min_start_speed_kmh <= o.max_start_speed_kmh && o.max_start_speed_kmh <= 20))
+    problems.push_back("min_start_speed_kmh and max_start_speed_kmh must be finite with 0 <= min <= max <= 20 (are " +
+                       std::to_string(o.min_start_speed_kmh) + " and " + std::to_string(o.max_start_speed_kmh) + ")");
   if (!(std::isfinite(d.min_fill) && d.min_fill >= 0 && d.min_fill <= 1))
     problems.push_back("detector.min_fill must be in [0, 1]");
   return problems;
@@ -54,6 +58,8 @@ void TrackingSession::startFrom(const InitialGuess& guess) { pending_guess_ = gu
 
 void TrackingSession::startFromBox(const cv::Rect2d& box_px) {
   pending_guess_ = guessFromBox(tracker_->camera(), tracker_->ground(), box_px);
+  pending_guess_->min_speed_kmh = options_.min_start_speed_kmh;
+  pending_guess_->max_speed_kmh = options_.max_start_speed_kmh;
 }
 
 std::vector<SessionAnswer> TrackingSession::feed(const cv::Mat& bgr, double stamp_s) {
@@ -195,6 +201,8 @@ std::optional<InitialGuess> TrackingSession::guessFromSightings(const cv::Mat& b
     guess.position_m = current->person.ground_xy_m;
     guess.heading_rad = std::atan2(walked.y(), walked.x());
     guess.heading_sd_rad = 0.5;
+    guess.min_speed_kmh = options_.min_start_speed_kmh;
+    guess.max_speed_kmh = options_.max_start_speed_kmh;
     return guess;
   }
   return std::nullopt;

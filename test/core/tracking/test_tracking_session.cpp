@@ -204,9 +204,30 @@ TEST(TrackingSession, ResetStartsOverAndRefusesAFrameOfAnotherSize) {
   EXPECT_TRUE(session.feed(s.frames[0], 0.0).empty());
 }
 
+// A track started from a box, or from a person the session finds, starts on the gaits of the
+// options' speed range: at 4.5-4.5 km/h the first answer's MAP gait walks 4.5 km/h, whichever way
+// it was started.
+TEST(TrackingSession, StartsOnTheOptionsSpeedRange) {
+  for (const bool from_box : {true, false}) {
+    SessionOptions options = holding(10);
+    options.min_start_speed_kmh = options.max_start_speed_kmh = 4.5;
+    TrackingSession session(makeTracker(100), options);
+    if (from_box) session.startFromBox(truthBox());
+    bool checked = false;
+    for (const SessionAnswer& a : run(session))
+      if (a.started && !checked) {
+        EXPECT_EQ(a.estimate->speed_kmh, 4.5) << (from_box ? "from a box" : "found");
+        checked = true;
+      }
+    EXPECT_TRUE(checked) << (from_box ? "from a box" : "found") << ": no track started";
+  }
+}
+
 TEST(TrackingSession, RefusesBadOptionsNamingThem) {
   SessionOptions options;
   options.background_frames = 0;
+  options.min_start_speed_kmh = 5;
+  options.max_start_speed_kmh = 4;
   options.min_walk_m = std::nan("");
   try {
     TrackingSession session(makeTracker(10), options);
@@ -214,6 +235,7 @@ TEST(TrackingSession, RefusesBadOptionsNamingThem) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("background_frames"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("min_walk_m"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("min_start_speed_kmh and max_start_speed_kmh"), std::string::npos) << e.what();
   }
 }
 

@@ -30,6 +30,11 @@ struct SessionOptions {
   int heading_frames = 5;      // a found person's direction from their blob this many frames on, [1, 50]
   double min_walk_m = 0.15;    // the blob must move at least this far in heading_frames, m
   bool find_people = true;     // find the person in the image when no guess or box is given
+  // The walking speeds a track started from a box or a found person starts on, km/h (the table's
+  // gaits in this range; TrackerOptions::min_gait_speed_kmh says which gaits exist). 1.5–6 with
+  // the slow walks, as the demo's track_offline --min-speed 1.5.
+  double min_start_speed_kmh = 3.0;  // [0, 20]
+  double max_start_speed_kmh = 6.0;  // [min_start_speed_kmh, 20]
   vision::PersonDetectorOptions detector;
 };
 
