@@ -310,6 +310,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "track_offline: --strip needs --strip-frames\n");
     return 1;
   }
+  if (!strip_path.empty() && !cv::haveImageWriter(strip_path)) {
+    std::fprintf(stderr, "track_offline: --strip %s: not a picture file OpenCV can write (.png, .jpg)\n", strip_path.c_str());
+    return 1;
+  }
   if (!init_stance.empty()) guess.stance_leg = init_stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
 
   // The outputs are opened first (an unwritable one fails at once) and removed when the run
@@ -373,6 +377,9 @@ int main(int argc, char** argv) {
     likelihood.use_flow = !no_flow;
     kw::tracking::SessionOptions session_options;
     session_options.background_frames = background_samples;
+    // A person the session finds starts on the same speeds as one started from a box.
+    session_options.min_start_speed_kmh = guess.min_speed_kmh;
+    session_options.max_start_speed_kmh = guess.max_speed_kmh;
     kw::tracking::TrackingSession session(
         std::make_unique<kw::tracking::Tracker>(*camera, ground, table, kw::prior::loadPriorOptions(prior_path),
                                                 options, likelihood),

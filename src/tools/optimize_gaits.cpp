@@ -114,13 +114,18 @@ int run(int argc, char** argv) {
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"}})
+  for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"}}) {
+    if (axis->size() == 1) {
+      std::fprintf(stderr, "optimize_gaits: %s needs at least two values (a grid axis)\n", name);
+      return 1;
+    }
     for (size_t i = 1; i < axis->size(); ++i)
       if (!((*axis)[i - 1] < (*axis)[i])) {
         std::fprintf(stderr, "optimize_gaits: %s must be ascending without repeats (%g then %g)\n", name,
                      (*axis)[i - 1], (*axis)[i]);
         return 1;
       }
+  }
   threads = kw::common::resolveThreads(threads);
   kw::dynamics::BodyProportions proportions;
   try {

@@ -67,6 +67,8 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
         table.body.leg_length_per_height, grid.gravity);
     gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
     gait.step_length_m = grid.step_lengths_m[cell[1]] * leg_m / grid.referenceLegLength();
+    gait.speed_index = cell[0];
+    gait.step_index = cell[1];
     bank_.push_back(std::move(gait));
   }
   if (bank_.empty())
@@ -80,12 +82,10 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
       *breadth *= options.person_breadth_scale;
   }
   // Neighbours: a stride may move to a gait one grid step away in speed and step length.
-  const double speed_step = (grid.speeds_kmh[1] - grid.speeds_kmh[0]) * froude_speed;
-  const double length_step = (grid.step_lengths_m[1] - grid.step_lengths_m[0]) * leg_m / grid.referenceLegLength();
   for (size_t a = 0; a < bank_.size(); ++a)
     for (size_t b = 0; b < bank_.size(); ++b)
-      if (a != b && std::abs(bank_[a].speed_kmh - bank_[b].speed_kmh) < 1.01 * speed_step &&
-          std::abs(bank_[a].step_length_m - bank_[b].step_length_m) < 1.01 * length_step)
+      if (a != b && std::abs(bank_[a].speed_index - bank_[b].speed_index) <= 1 &&
+          std::abs(bank_[a].step_index - bank_[b].step_index) <= 1)
         bank_[a].neighbours.push_back(static_cast<int>(b));
 }
 

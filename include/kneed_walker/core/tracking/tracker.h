@@ -134,6 +134,7 @@ class Tracker {
   struct BankGait {
     std::unique_ptr<prior::BodyPrior> prior;
     double speed_kmh = 0, step_length_m = 0;  // the person's, by Froude scaling
+    int speed_index = 0, step_index = 0;      // its grid point's
     std::vector<int> neighbours;  // gaits one grid step away in speed and/or step length
   };
   // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround).
