@@ -4,7 +4,6 @@
 #include <ros/param.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -140,7 +139,6 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
 
   RosInterfaceOptions& r = config.ros;
   reader.read("world_frame", r.world_frame);
-  reader.read("body_id", r.body_id);
   reader.read("image_queue_size", r.image_queue_size);
   reader.read("image_transport", r.image_transport);
   reader.read("publish_particle_cloud", r.publish_particle_cloud);
@@ -165,6 +163,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("find_people", session.find_people);
   reader.read("min_start_speed_kmh", session.min_start_speed_kmh);
   reader.read("max_start_speed_kmh", session.max_start_speed_kmh);
+  reader.read("max_people", session.max_people);
+  reader.read("merge_distance_m", session.merge_distance_m);
   for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
   if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
     reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +
@@ -194,13 +194,6 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   if (r.world_frame.empty() || r.world_frame.front() == '/')
     reader.addProblem(reader.qualified("world_frame") + " = '" + r.world_frame +
                       "' must be a non-empty tf2 frame id without a leading '/'");
-  const bool id_ok = !r.body_id.empty() &&
-                     std::all_of(r.body_id.begin(), r.body_id.end(), [](char c) {
-                       return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-                     });
-  if (!id_ok)
-    reader.addProblem(reader.qualified("body_id") + " = '" + r.body_id +
-                      "' must be letters, digits or '_' (REP 155 frame suffix)");
   if (r.image_queue_size < 1 || r.image_queue_size > 100)
     reader.addProblem(reader.qualified("image_queue_size") + " = " +
                       std::to_string(r.image_queue_size) + " is outside [1, 100]");

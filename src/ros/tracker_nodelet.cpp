@@ -10,11 +10,13 @@
 //          (remap them). The camera's pose: tf's world_frame -> camera_info's frame, or the
 //          ~camera_file calibration. ~init_box (sensor_msgs/RegionOfInterest, pixels): where the
 //          person is; the track (re)starts from that box at the next frame it can.
-// Outputs: ~body_pose (kneed_walker/BodyPose), ~pose (geometry_msgs/PoseWithCovarianceStamped),
-//          ~walker_state (kneed_walker/WalkerState), ~status (kneed_walker/TrackingStatus, latched),
-//          ~particle_cloud (geometry_msgs/PoseArray, throttled), ~markers
-//          (visualization_msgs/MarkerArray), ~overlay (sensor_msgs/Image), /tf (body_<id> and
-//          REP 155 joint frames), /diagnostics. All stamped with the image's time.
+// Outputs: per tracked person (up to ~max_people; REP 155 body ids "1".."max_people"):
+//          ~body_pose (kneed_walker/BodyPose), ~pose (geometry_msgs/PoseWithCovarianceStamped),
+//          ~walker_state (kneed_walker/WalkerState), ~markers (visualization_msgs/MarkerArray),
+//          /tf (body_<id> and REP 155 joint frames); per frame: ~body_poses
+//          (kneed_walker/BodyPoseArray, every person), ~status (kneed_walker/TrackingStatus,
+//          latched), ~particle_cloud (geometry_msgs/PoseArray, every person's, throttled),
+//          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
 //
 // Threads: the subscriber callback only hands the newest frame to a worker thread and
 // returns; a frame that arrives while the worker is busy replaces the one waiting, which is
@@ -43,6 +45,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "kneed_walker/BodyPoseArray.h"
 #include "kneed_walker/TrackerConfig.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "kneed_walker/core/prior/walker_prior.h"
@@ -78,8 +81,9 @@ class TrackerNodelet : public nodelet::Nodelet {
   kw::prior::PriorOptions priorOptions() const;
   void publishAnswer(const kw::tracking::SessionAnswer& answer, const sensor_msgs::ImageConstPtr& image);
   void skipFrame(const std_msgs::Header& header, const std::string& reason);
+  // `people`: tracks running after the frame (-1: the session's count now).
   void publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
-                     const kw::tracking::TrackEstimate* estimate);
+                     const kw::tracking::TrackEstimate* estimate, int people = -1);
   void reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   TrackerNodeConfig config_;
@@ -92,8 +96,8 @@ class TrackerNodelet : public nodelet::Nodelet {
   image_transport::CameraSubscriber camera_subscriber_;
   ros::Subscriber init_box_subscriber_;
   image_transport::Publisher overlay_publisher_;
-  ros::Publisher body_pose_publisher_, pose_publisher_, walker_state_publisher_, status_publisher_,
-      particle_cloud_publisher_, markers_publisher_;
+  ros::Publisher body_pose_publisher_, body_poses_publisher_, pose_publisher_, walker_state_publisher_,
+      status_publisher_, particle_cloud_publisher_, markers_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -134,7 +138,8 @@ class TrackerNodelet : public nodelet::Nodelet {
   uint64_t frames_received_ = 0, frames_dropped_ = 0, frames_processed_ = 0, frames_skipped_ = 0,
            frames_answered_ = 0, resets_ = 0;
   double last_effective_sample_size_ = 0, last_processing_s_ = 0;
-  int num_particles_ = 0;
+  int num_particles_ = 0, people_tracked_ = 0;
+  uint64_t tracks_started_ = 0;
   std::string state_name_ = "waiting for frames", last_problem_;
 };
 
@@ -172,13 +177,16 @@ void TrackerNodelet::onInit() {
 
   // Once the background is learned, the held frames are answered at once: the queues hold them.
   const uint32_t queue = static_cast<uint32_t>(config_.session.background_frames) + 10;
-  body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", queue);
-  pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", queue);
-  walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", queue);
+  // A frame's answer publishes a message per person on the per-person topics.
+  const uint32_t person_queue = queue * static_cast<uint32_t>(config_.session.max_people);
+  body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", person_queue);
+  body_poses_publisher_ = private_nh.advertise<BodyPoseArray>("body_poses", queue);
+  pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", person_queue);
+  walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", person_queue);
   status_publisher_ = private_nh.advertise<TrackingStatus>("status", queue, /*latch=*/true);
   // Every output is advertised; the switches (which dynamic_reconfigure may flip) gate publishing.
   particle_cloud_publisher_ = private_nh.advertise<geometry_msgs::PoseArray>("particle_cloud", 2);
-  markers_publisher_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 2);
+  markers_publisher_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 2 * config_.session.max_people);
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
@@ -228,8 +236,9 @@ void TrackerNodelet::onInit() {
   camera_subscriber_ = image_transport_->subscribeCamera(
       "image", static_cast<uint32_t>(config_.ros.image_queue_size), &TrackerNodelet::onFrame, this,
       image_transport::TransportHints(config_.ros.image_transport, ros::TransportHints(), private_nh));
-  NODELET_INFO("tracking %d particles (seed %lu), person %.2f m; input %s; camera %s", config_.tracker.num_particles,
-               static_cast<unsigned long>(config_.tracker.seed), config_.tracker.person_height_m,
+  NODELET_INFO("tracking up to %d %s with %d particles each (seed %lu), %.2f m tall; input %s; camera %s",
+               config_.session.max_people, config_.session.max_people == 1 ? "person" : "people",
+               config_.tracker.num_particles, static_cast<unsigned long>(config_.tracker.seed), config_.tracker.person_height_m,
                camera_subscriber_.getTopic().c_str(),
                file_camera_ ? config_.ros.camera_file.c_str() : ("camera_info + tf from " + config_.ros.world_frame).c_str());
 }
@@ -341,8 +350,7 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
   }
   const kw::vision::GroundPlane ground = file_camera_ ? file_ground_ : kw::vision::GroundPlane{};
   session_ = std::make_unique<kw::tracking::TrackingSession>(
-      std::make_unique<kw::tracking::Tracker>(*camera, ground, prior_table_, priorOptions(), config_.tracker),
-      config_.session);
+      kw::tracking::trackerFactory(*camera, ground, prior_table_, priorOptions(), config_.tracker), config_.session);
   session_size_ = size;
   session_frame_id_ = frame.image->header.frame_id;
   const auto& b = config_.ros.init_box;
@@ -449,43 +457,71 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
   std_msgs::Header header;
   header.stamp = image->header.stamp;
   header.frame_id = config_.ros.world_frame;
+  const kw::tracking::TrackEstimate* first = nullptr;  // the lowest-numbered body's, for ~status
+  for (const kw::tracking::PersonAnswer& person : answer.people)
+    if (person.estimate && !first) first = &*person.estimate;
   {
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++frames_answered_;
     state_name_ = kw::tracking::stateName(answer.state);
-    if (answer.estimate) last_effective_sample_size_ = answer.estimate->effective_sample_size;
+    if (first) last_effective_sample_size_ = first->effective_sample_size;
+    people_tracked_ = session_->trackCount();
+    for (const kw::tracking::PersonAnswer& person : answer.people) tracks_started_ += person.started;
   }
   if (answer.start_failed) NODELET_ERROR("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
-  if (!answer.message.empty() && (answer.started || answer.state == kw::tracking::SessionState::kLost))
-    NODELET_INFO("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
-  if (!answer.estimate) {
-    publishStatus(header, TrackingStatus::WAITING, answer.message, nullptr);
-    return;
-  }
-  const kw::tracking::TrackEstimate& estimate = *answer.estimate;
-  const std::string& id = config_.ros.body_id;
-  body_pose_publisher_.publish(boost::make_shared<BodyPose>(toBodyPose(estimate, header, id)));
-  pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
-  walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
-  markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0, session_->tracker().shape())));
-  if (publishing_.publish_tf) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
-  const kw::tracking::Tracker& tracker = session_->tracker();
+  for (const kw::tracking::PersonAnswer& person : answer.people)
+    if (!person.message.empty() && (person.started || person.ended))
+      NODELET_INFO("frame at %.3f s: body %d: %s", header.stamp.toSec(), person.body, person.message.c_str());
+  auto poses = boost::make_shared<BodyPoseArray>();
+  poses->header = header;
+  cv_bridge::CvImagePtr picture;
+  if (publishing_.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) picture = cv_bridge::toCvCopy(image, "bgr8");
+  geometry_msgs::PoseArray cloud;
   const ros::WallTime now = ros::WallTime::now();
-  if (publishing_.publish_particle_cloud && tracker.started() &&
-      (now - last_cloud_).toSec() >= publishing_.particle_cloud_interval_s) {
+  const bool send_cloud = publishing_.publish_particle_cloud && (now - last_cloud_).toSec() >= publishing_.particle_cloud_interval_s;
+  for (const kw::tracking::PersonAnswer& person : answer.people) {
+    if (!person.estimate) continue;
+    const kw::tracking::TrackEstimate& estimate = *person.estimate;
+    const kw::tracking::Tracker& tracker = session_->tracker(person.body);
+    const std::string id = std::to_string(person.body);
+    poses->bodies.push_back(toBodyPose(estimate, header, id));
+    body_pose_publisher_.publish(boost::make_shared<BodyPose>(poses->bodies.back()));
+    pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
+    walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
+    markers_publisher_.publish(
+        boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0, tracker.shape())));
+    if (publishing_.publish_tf) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
+    if (send_cloud && tracker.started()) {
+      const geometry_msgs::PoseArray own = toParticleCloud(tracker.particles(), header);
+      cloud.header = own.header;
+      cloud.poses.insert(cloud.poses.end(), own.poses.begin(), own.poses.end());
+    }
+    if (picture) {
+      kw::vision::BodyOutlines outlines;
+      tracker.project(estimate.pose, outlines);
+      kw::vision::drawOverlay(picture->image, tracker.camera(), estimate.pose, outlines);
+    }
+  }
+  body_poses_publisher_.publish(poses);
+  if (!cloud.poses.empty()) {
     last_cloud_ = now;
-    particle_cloud_publisher_.publish(
-        boost::make_shared<geometry_msgs::PoseArray>(toParticleCloud(tracker.particles(), header)));
+    particle_cloud_publisher_.publish(boost::make_shared<geometry_msgs::PoseArray>(std::move(cloud)));
   }
-  if (publishing_.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) {
-    cv_bridge::CvImagePtr picture = cv_bridge::toCvCopy(image, "bgr8");
-    kw::vision::BodyOutlines outlines;
-    tracker.project(estimate.pose, outlines);
-    kw::vision::drawOverlay(picture->image, tracker.camera(), estimate.pose, outlines);
-    overlay_publisher_.publish(picture->toImageMsg());
-  }
-  publishStatus(header, answer.state == kw::tracking::SessionState::kLost ? TrackingStatus::LOST : TrackingStatus::TRACKING,
-                answer.message, &estimate);
+  if (picture) overlay_publisher_.publish(picture->toImageMsg());
+  // The session's message and what happened to each person at this frame.
+  std::string message = answer.message;
+  for (const kw::tracking::PersonAnswer& person : answer.people)
+    if (!person.message.empty())
+      message += (message.empty() ? "" : "; ") + (config_.session.max_people > 1 ? "body " + std::to_string(person.body) + ": " : "") +
+                 person.message;
+  const uint8_t state = answer.state == kw::tracking::SessionState::kTracking ? TrackingStatus::TRACKING
+                        : answer.state == kw::tracking::SessionState::kLost   ? TrackingStatus::LOST
+                                                                              : TrackingStatus::WAITING;
+  const int people = static_cast<int>(std::count_if(answer.people.begin(), answer.people.end(), [](const auto& p) {
+    return p.estimate && !p.ended;
+  }));
+  publishStatus(header, state, message, first, people);
+  if (state != TrackingStatus::TRACKING) return;
   output_rate_->tick();
   output_latency_->tick(header.stamp);
 }
@@ -503,12 +539,13 @@ void TrackerNodelet::skipFrame(const std_msgs::Header& header, const std::string
 }
 
 void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
-                                   const kw::tracking::TrackEstimate* estimate) {
+                                   const kw::tracking::TrackEstimate* estimate, int people) {
   auto status = boost::make_shared<TrackingStatus>();
   status->header.stamp = header.stamp;
   status->header.frame_id = config_.ros.world_frame;
   status->state = state;
   status->num_particles = static_cast<uint32_t>(config_.tracker.num_particles);
+  status->people_tracked = static_cast<uint32_t>(people >= 0 ? people : session_ ? session_->trackCount() : 0);
   if (estimate) {
     status->effective_sample_size = estimate->effective_sample_size;
     status->resampled = estimate->resampled;
@@ -537,7 +574,9 @@ void TrackerNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapp
   status.add("restarts (stamps went back, images changed)", resets_);
   status.add("effective sample size", last_effective_sample_size_);
   status.add("processing time (s)", last_processing_s_);
-  status.add("particles", num_particles_);
+  status.add("particles per person", num_particles_);
+  status.add("people tracked", people_tracked_);
+  status.add("tracks started", tracks_started_);
   status.add("input", camera_subscriber_.getTopic());
 }
 

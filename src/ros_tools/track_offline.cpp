@@ -1,7 +1,8 @@
 // track_offline: the tracker (paper §4) on a recorded sequence, frame by frame, deterministic for
 // a seed: a rosbag (image + camera_info topics; the camera's pose from /tf_static or a camera
-// file) or a video with a camera file. Writes the MAP joints per frame as CSV
-// `frame,stamp,joint,x,y,z` (the synthetic ground truth's format): by default each track's
+// file) or a video with a camera file; one person, or up to --max-people at once. Writes the MAP
+// joints per frame and body as CSV `frame,stamp,joint,x,y,z,body` (the synthetic ground truth's
+// format, and the REP 155 body id): by default each track's
 // whole MAP state sequence, one particle's path written when the track ends (--lagged: each
 // frame Δs frames later, as the nodelet; --filtered: each frame's best particle at once),
 // optionally an overlay video and the projected body's image box per frame (for comparing
@@ -34,6 +35,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "kneed_walker/core/tracking/tracking_session.h"
@@ -202,7 +204,7 @@ int main(int argc, char** argv) {
   std::vector<double> init_box, init_position;
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
-  int first_frame = 0, max_frames = 0, background_samples = 25;
+  int first_frame = 0, max_frames = 0, background_samples = 25, max_people = 1;
   bool no_flow = false, filtered = false, lagged = false, background_from_start = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
@@ -250,7 +252,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(FiniteRange(0.5, 3.0));
   app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
       ->capture_default_str()->check(FiniteRange(0.0, 3.0));
-  app.add_option("--particles", options.num_particles, "particles")->capture_default_str()->check(CLI::Range(1, 1000000));
+  app.add_option("--particles", options.num_particles, "particles (per person)")->capture_default_str()->check(CLI::Range(1, 1000000));
+  app.add_option("--max-people", max_people,
+                 "people tracked at once, each found walking by itself (as the nodelet's max_people): bodies 1..N")
+      ->capture_default_str()->check(CLI::Range(1, 16));
   app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)")
       ->check(FiniteRange(1e-9, 1e6));
   app.add_option("--resample-lag", options.resample_lag_frames, "Δs: resample from this many frames back")
@@ -287,7 +292,7 @@ int main(int argc, char** argv) {
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
-  app.add_option("--out-csv", out_csv, "MAP joints per frame (frame,stamp,joint,x,y,z)")->required();
+  app.add_option("--out-csv", out_csv, "MAP joints per frame and body (frame,stamp,joint,x,y,z,body)")->required();
   app.add_option("--overlay", overlay_path, "overlay video (MJPG .avi)");
   std::string strip_path;
   std::vector<int> strip_frames;
@@ -296,8 +301,8 @@ int main(int argc, char** argv) {
   app.add_option("--strip-frames", strip_frames, "frames for --strip, comma-separated")
       ->delimiter(',')->check(CLI::NonNegativeNumber);
   app.add_option("--out-boxes", out_boxes,
-                 "the MAP body's image box per frame, as written to --out-csv (frame,x1,y1,x2,y2; px): the "
-                 "bounding box of the projected parts' outlines");
+                 "the MAP body's image box per frame and body, as written to --out-csv (frame,x1,y1,x2,y2,body; px): "
+                 "the bounding box of the projected parts' outlines");
   CLI11_PARSE(app, argc, argv);
   if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
   options.keep_whole_path = !filtered && !lagged;
@@ -380,11 +385,10 @@ int main(int argc, char** argv) {
     // A person the session finds starts on the same speeds as one started from a box.
     session_options.min_start_speed_kmh = guess.min_speed_kmh;
     session_options.max_start_speed_kmh = guess.max_speed_kmh;
+    session_options.max_people = max_people;
     kw::tracking::TrackingSession session(
-        std::make_unique<kw::tracking::Tracker>(*camera, ground, table, kw::prior::loadPriorOptions(prior_path),
-                                                options, likelihood),
+        kw::tracking::trackerFactory(*camera, ground, table, kw::prior::loadPriorOptions(prior_path), options, likelihood),
         session_options);
-    const kw::tracking::Tracker& tracker = session.tracker();
 
     // The background: an image, frames spread over the input, or (--background-from-start) the
     // session's own from the first frames.
@@ -446,57 +450,52 @@ int main(int argc, char** argv) {
       session.startFrom(guessAt(*box, first_frame));
     }
 
-    csv << "frame,stamp,joint,x,y,z\n" << std::fixed << std::setprecision(9);
-    if (boxes_csv.is_open()) boxes_csv << "frame,x1,y1,x2,y2\n" << std::fixed << std::setprecision(2);
+    csv << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+    if (boxes_csv.is_open()) boxes_csv << "frame,x1,y1,x2,y2,body\n" << std::fixed << std::setprecision(2);
     std::vector<int> source_index;  // per session input: the input's frame index
-    // The bounding box of a pose's projected parts' outlines (the ones the overlay draws), px.
-    auto imageBox = [&](const kw::body::BodyPose& pose) {
-      kw::vision::BodyOutlines outlines;
-      tracker.project(pose, outlines);
-      Eigen::AlignedBox2d box;
-      for (const kw::vision::PartOutline& part : outlines)
-        if (part.visible)
-          for (int i = 0; i < part.size; ++i) box.extend(part.hull[i]);
-      return box;
-    };
-    std::map<int, cv::Mat> strip_pictures;  // by frame: the overlay cropped around the body
-    auto writePose = [&](int input, double input_stamp, const kw::body::BodyPose& pose) {
+    std::map<int, cv::Mat> strip_pictures;  // by frame: the overlay cropped around the bodies
+    auto writePose = [&](int input, double input_stamp, const kw::body::BodyPose& pose, int body) {
       for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
         const Eigen::Vector3d& p = pose.joints[j];
         csv << source_index.at(input) << ',' << input_stamp << ',' << kw::body::jointName(kw::body::BodyJoint(j))
-            << ',' << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+            << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << body << '\n';
       }
       if (!boxes_csv.is_open()) return;
-      const Eigen::AlignedBox2d box = imageBox(pose);
-      if (!box.isEmpty())
-        boxes_csv << source_index.at(input) << ',' << box.min().x() << ',' << box.min().y() << ',' << box.max().x()
-                  << ',' << box.max().y() << '\n';
+      const cv::Rect2d box = session.tracker(body).imageBox(pose);
+      if (!box.empty())
+        boxes_csv << source_index.at(input) << ',' << box.x << ',' << box.y << ',' << box.br().x << ',' << box.br().y
+                  << ',' << body << '\n';
     };
     std::vector<double> total_ms, precompute_ms, particles_ms;
     const bool tty = isatty(STDERR_FILENO);
     std::map<int, cv::Mat> unanswered;  // frames held by the session, for the overlay
-    int index = -1, tracked = 0, answered = 0, lost = 0, resampled = 0, starts = 0, skipped = 0;
-    bool last_lost = false;
-    cv::Point2d last_seen_px;
+    int index = -1, tracked = 0, answered = 0, lost = 0, resampled = 0, starts = 0, skipped = 0, most_people = 0;
+    std::set<int> bodies_used;
+    std::optional<cv::Point2d> lost_at_px;  // where a lost track was last seen, to start again from a box there
     auto answer = [&](const kw::tracking::SessionAnswer& a, bool latest) {
       ++answered;
       if (a.start_failed) std::fprintf(stderr, "\ntrack_offline: frame %d: %s\n", source_index.at(a.input), a.message.c_str());
-      for (const kw::tracking::MapFrame& m : a.map_frames)
-        if (!filtered) writePose(m.input, m.stamp_s, m.pose);
       cv::Mat picture;
       if (draw) {
         picture = unanswered.at(a.input);
         unanswered.erase(a.input);
       }
-      if (a.estimate) {
-        const kw::tracking::TrackEstimate& estimate = *a.estimate;
-        ++tracked;
-        starts += a.started;
+      int people_now = 0;
+      std::optional<cv::Rect2d> strip_box;  // the tracked bodies' image boxes, for the strip
+      for (const kw::tracking::PersonAnswer& person : a.people) {
+        for (const kw::tracking::MapFrame& m : person.map_frames)
+          if (!filtered) writePose(m.input, m.stamp_s, m.pose, person.body);
+        if (!person.estimate) continue;
+        const kw::tracking::TrackEstimate& estimate = *person.estimate;
+        const kw::tracking::Tracker& tracker = session.tracker(person.body);
+        ++people_now;
+        bodies_used.insert(person.body);
+        starts += person.started;
         lost += estimate.lost;
         resampled += estimate.resampled;
-        if (filtered) writePose(a.input, a.stamp_s, estimate.pose);
-        if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist]))
-          last_seen_px = cv::Point2d(px->x(), px->y());
+        if (filtered) writePose(a.input, a.stamp_s, estimate.pose, person.body);
+        if (estimate.lost)
+          if (const auto px = camera->project(estimate.pose.joints[kw::body::kWaist])) lost_at_px = cv::Point2d(px->x(), px->y());
         if (draw) {
           std::vector<Eigen::Vector2f> cloud;
           if (latest && tracker.started())
@@ -506,24 +505,35 @@ int main(int argc, char** argv) {
           kw::vision::BodyOutlines outlines;
           tracker.project(estimate.pose, outlines);
           kw::vision::drawOverlay(picture, *camera, estimate.pose, outlines, cloud);
+          const cv::Rect2d box = tracker.imageBox(estimate.pose);
+          if (!box.empty()) {
+            if (max_people > 1)
+              cv::putText(picture, std::to_string(person.body), cv::Point(cvRound(box.x), cvRound(box.y) - 3),
+                          cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+            strip_box = strip_box ? (*strip_box | box) : box;
+          }
         }
       }
-      last_lost = a.state == kw::tracking::SessionState::kLost;
+      tracked += people_now > 0;
+      most_people = std::max(most_people, people_now);
       if (draw) {
+        const kw::tracking::PersonAnswer* first = a.people.empty() ? nullptr : &a.people.front();
         cv::putText(picture,
                     cv::format("frame %d  %s", source_index.at(a.input), kw::tracking::stateName(a.state)) +
-                        (a.estimate ? cv::format("  N_eff %.0f  %.1f km/h", a.estimate->effective_sample_size,
-                                                 a.estimate->speed_kmh)
-                                    : std::string()),
+                        (max_people > 1 ? cv::format("  %d people", people_now)
+                         : first && first->estimate ? cv::format("  N_eff %.0f  %.1f km/h", first->estimate->effective_sample_size,
+                                                                 first->estimate->speed_kmh)
+                                                    : std::string()),
                     {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
         if (!overlay_path.empty()) overlay.write(picture);
         const int frame_number = source_index.at(a.input);
-        if (a.estimate && std::find(strip_frames.begin(), strip_frames.end(), frame_number) != strip_frames.end()) {
-          // A portrait crop 1.4 body heights tall around the body, 240 px tall in the strip.
-          const Eigen::AlignedBox2d box = imageBox(a.estimate->pose);
-          if (!box.isEmpty()) {
-            const double height = 1.4 * box.sizes().y(), width = 0.75 * height;
-            const cv::Rect crop = cv::Rect(cv::Point(cvRound(box.center().x() - width / 2), cvRound(box.center().y() - height / 2)),
+        if (strip_box && std::find(strip_frames.begin(), strip_frames.end(), frame_number) != strip_frames.end()) {
+          // A portrait crop 1.4 body heights tall around the bodies, 240 px tall in the strip.
+          const cv::Rect2d& box = *strip_box;
+          const Eigen::Vector2d centre(box.x + box.width / 2, box.y + box.height / 2);
+          {
+            const double height = 1.4 * box.height, width = std::max(0.75 * height, box.width + 0.2 * height);
+            const cv::Rect crop = cv::Rect(cv::Point(cvRound(centre.x() - width / 2), cvRound(centre.y() - height / 2)),
                                            cv::Size(cvRound(width), cvRound(height))) &
                                   cv::Rect(0, 0, picture.cols, picture.rows);
             if (crop.area() > 0) {
@@ -544,18 +554,18 @@ int main(int argc, char** argv) {
       if (index < first_frame) continue;
       if (max_frames > 0 && session.framesFed() >= max_frames) break;
       // A lost track starts again from the box nearest to where the person was last seen.
-      if (last_lost && !boxes_path.empty()) {
+      if (lost_at_px && !boxes_path.empty()) {
         std::optional<cv::Rect2d> nearest;
         double best = 1e300;
         for (const auto& [box, score] : boxes.count(index) ? boxes.at(index) : std::vector<std::pair<cv::Rect2d, double>>{}) {
-          const double d = cv::norm((box.tl() + box.br()) * 0.5 - last_seen_px);
+          const double d = cv::norm((box.tl() + box.br()) * 0.5 - *lost_at_px);
           if (d < best) best = d, nearest = box;
         }
         if (nearest) {
           kw::tracking::InitialGuess again = guessAt(*nearest, index);
           again.stance_leg.reset();
           session.startFrom(again);
-          last_lost = false;
+          lost_at_px.reset();
         }
       }
       std::vector<kw::tracking::SessionAnswer> answers;
@@ -569,11 +579,17 @@ int main(int argc, char** argv) {
       source_index.push_back(index);
       if (draw) unanswered[session.framesFed() - 1] = frame.clone();
       for (size_t i = 0; i < answers.size(); ++i) answer(answers[i], i + 1 == answers.size());
-      if (!answers.empty() && answers.back().estimate && answered > 1) {
-        const kw::tracking::TrackerTiming& timing = tracker.timing();
-        total_ms.push_back(timing.total_ms);
-        precompute_ms.push_back(timing.precompute_ms);
-        particles_ms.push_back(timing.particles_ms);
+      if (!answers.empty() && !answers.back().people.empty() && answered > 1) {
+        // The frame's whole tracking (all people, the search for new ones) and the trackers' parts.
+        double precompute = 0, particles = 0;
+        for (const kw::tracking::PersonAnswer& person : answers.back().people) {
+          const kw::tracking::TrackerTiming& timing = session.tracker(person.body).timing();
+          precompute += timing.precompute_ms;
+          particles += timing.particles_ms;
+        }
+        total_ms.push_back(session.lastFrameMs());
+        precompute_ms.push_back(precompute);
+        particles_ms.push_back(particles);
       }
       const int todo = max_frames > 0 ? std::min(max_frames, total - first_frame) : total - first_frame;
       const int fed = session.framesFed();
@@ -587,8 +603,9 @@ int main(int argc, char** argv) {
       const std::vector<kw::tracking::SessionAnswer> rest = session.flushHeld();  // an input shorter than the samples
       for (size_t i = 0; i < rest.size(); ++i) answer(rest[i], i + 1 == rest.size());
     }
-    for (const kw::tracking::MapFrame& m : session.finish())
-      if (!filtered) writePose(m.input, m.stamp_s, m.pose);
+    for (const kw::tracking::PersonAnswer& person : session.finish())
+      for (const kw::tracking::MapFrame& m : person.map_frames)
+        if (!filtered) writePose(m.input, m.stamp_s, m.pose, person.body);
     if (tracked == 0) throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
     if (!strip_path.empty()) {
       if (strip_pictures.empty()) throw std::runtime_error("--strip-frames: none of them was tracked");
@@ -603,7 +620,10 @@ int main(int argc, char** argv) {
     }
     std::printf("frames=%d tracked_frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d "
                 "particles=%d\n",
-                answered, tracked, skipped, lost, std::max(0, starts - 1), resampled, options.num_particles);
+                answered, tracked, skipped, lost, std::max(0, starts - static_cast<int>(bodies_used.size())), resampled,
+                options.num_particles);
+    if (max_people > 1)
+      std::printf("tracks_started=%d bodies_used=%zu most_people_at_once=%d\n", starts, bodies_used.size(), most_people);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));
   } catch (const std::exception& e) {

@@ -1,6 +1,7 @@
 // evaluate: accuracy of a tracked sequence against ground truth, both as CSV
-// `frame,stamp,joint,x,y,z` (world frame, metres; make_synthetic's ground truth and
-// track_offline's estimate). Prints, over the frames and REP 155 joints present in both:
+// `frame,stamp,joint,x,y,z[,body]` (world frame, metres; make_synthetic's ground truth and
+// track_offline's estimate, whose body column is the REP 155 body id: one body is evaluated,
+// --body when the file has several). Prints, over the frames and REP 155 joints present in both:
 //   mean_joint_error_mm=     mean Euclidean joint error, world frame (MPJPE, global)
 //   root_relative_error_mm=  the same with each pose's mid-hip (waist) subtracted
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150)
@@ -16,7 +17,7 @@
 //                            (truth_ground_penetration_mm= the truth's)
 // and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
 //
-//   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--ground CAMERA.yml] [--lost-mm 150]
+//   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--body ID] [--ground CAMERA.yml] [--lost-mm 150]
 //          [--height 1.75] [--walker-model config/walker_model.yaml]
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -42,42 +43,55 @@ namespace {
 
 using Pose = std::map<std::string, Eigen::Vector3d>;
 
-std::map<int, Pose> readPoses(const std::string& path) {
+// The poses of one body: `body` (empty: the file's only one).
+std::map<int, Pose> readPoses(const std::string& path, const std::string& body) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot read");
   std::string line;
   if (!std::getline(in, line) || line.rfind("frame,stamp,joint,x,y,z", 0) != 0)
-    throw std::runtime_error(path + ": not a pose CSV (header frame,stamp,joint,x,y,z)");
-  std::map<int, Pose> poses;
+    throw std::runtime_error(path + ": not a pose CSV (header frame,stamp,joint,x,y,z[,body])");
+  const bool has_bodies = line.rfind("frame,stamp,joint,x,y,z,body", 0) == 0;
+  std::map<std::string, std::map<int, Pose>> bodies;
   int number = 1;
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
     std::istringstream fields(line);
-    std::string frame, stamp, joint, x, y, z;
+    std::string frame, stamp, joint, x, y, z, id;
     if (!std::getline(fields, frame, ',') || !std::getline(fields, stamp, ',') || !std::getline(fields, joint, ',') ||
-        !std::getline(fields, x, ',') || !std::getline(fields, y, ',') || !std::getline(fields, z, ','))
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected frame,stamp,joint,x,y,z");
+        !std::getline(fields, x, ',') || !std::getline(fields, y, ',') || !std::getline(fields, z, ',') ||
+        (has_bodies && (!std::getline(fields, id, ',') || id.empty())))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected frame,stamp,joint,x,y,z" +
+                               (has_bodies ? ",body" : ""));
     try {
       const Eigen::Vector3d p(std::stod(x), std::stod(y), std::stod(z));
       if (!p.allFinite()) throw std::invalid_argument("not finite");
-      poses[std::stoi(frame)][joint] = p;
+      bodies[id][std::stoi(frame)][joint] = p;
     } catch (const std::exception&) {
       throw std::runtime_error(path + ":" + std::to_string(number) + ": not numbers: " + line);
     }
   }
-  return poses;
+  std::string ids;
+  for (const auto& [id, poses] : bodies) ids += (ids.empty() ? "" : ", ") + id;
+  if (!body.empty() && has_bodies) {
+    const auto it = bodies.find(body);
+    if (it == bodies.end()) throw std::runtime_error("--body " + body + ": " + path + " has bodies " + ids);
+    return it->second;
+  }
+  if (bodies.size() > 1) throw std::runtime_error(path + " has bodies " + ids + ": choose one with --body");
+  return bodies.empty() ? std::map<int, Pose>{} : bodies.begin()->second;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Joint errors, lost frames, foot skate and ground penetration of a track against ground truth."};
-  std::string truth_path, estimate_path, ground_path;
+  std::string truth_path, estimate_path, ground_path, body;
   double lost_mm = 150, contact_mm = 5, height_m = 1.75;
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("truth", truth_path, "ground truth CSV")->required()->check(CLI::ExistingFile);
   app.add_option("estimate", estimate_path, "estimate CSV")->required()->check(CLI::ExistingFile);
+  app.add_option("--body", body, "the estimate's body (its body column) to evaluate; needed when it has several");
   app.add_option("--ground", ground_path, "calibration file with the ground plane (default: level Z = 0)")
       ->check(CLI::ExistingFile);
   app.add_option("--lost-mm", lost_mm, "a frame whose mean joint error exceeds this is lost")->capture_default_str()
@@ -90,7 +104,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto truth = readPoses(truth_path), estimate = readPoses(estimate_path);
+    const auto truth = readPoses(truth_path, ""), estimate = readPoses(estimate_path, body);
     const kw::vision::GroundPlane ground = ground_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(ground_path);
     std::map<std::string, std::pair<double, int>> per_joint;
     double sum = 0, root_sum = 0;

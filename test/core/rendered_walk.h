@@ -1,10 +1,12 @@
 // A synthetic walk rendered in memory for the core's vision and tracking tests: a person
 // walking across the PETS camera's view over a textured ground, with sensor noise, and
-// noisy frames of the empty scene to learn the background from.
+// noisy frames of the empty scene to learn the background from; optionally a second person in
+// other clothes walking the other way further off.
 #pragma once
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,27 +19,46 @@ struct RenderedWalk {
   vision::Camera camera =
       vision::Camera::load(std::string(KNEED_WALKER_SHARED_DIR) + "/data/pets2009/View_001_camera.yml", 0.001);
   synthetic::SyntheticWalk walk;
+  std::optional<synthetic::SyntheticWalk> second;  // the second person's walk
   body::BodyShape shape = body::BodyShape::forHeight(1.75);
   std::vector<cv::Mat> frames;  // BGR, one per walk frame
   std::vector<cv::Mat> empty;   // the scene without the person, 8 noisy frames
 
-  RenderedWalk(double duration_s, double fps, std::uint64_t seed) {
+  RenderedWalk(double duration_s, double fps, std::uint64_t seed, bool two_people = false) {
+    const gait::GaitTable table = gait::loadGaitTable(configFile("prior_gait_table.yaml"), shippedWalkerModel());
+    const prior::PriorOptions prior = prior::loadPriorOptions(configFile("prior.yaml"));
     synthetic::SyntheticWalkOptions o;
     o.start_m = camera.groundPoint({560, 470})->head<2>();
     o.heading_rad = 2.1;
     o.duration_s = duration_s;
     o.fps = fps;
     o.seed = seed;
-    walk = synthetic::synthesizeWalk(gait::loadGaitTable(configFile("prior_gait_table.yaml"), shippedWalkerModel()),
-                                     prior::loadPriorOptions(configFile("prior.yaml")), o);
+    walk = synthetic::synthesizeWalk(table, prior, o);
+    if (two_people) {
+      o.start_m = camera.groundPoint({200, 330})->head<2>();
+      o.heading_rad = 2.1 + M_PI;
+      o.seed = seed + 1;
+      second = synthetic::synthesizeWalk(table, prior, o);
+    }
     const cv::Mat ground = synthetic::texturedGround(camera, walk.ground, 5);
     for (int i = 0; i < 8; ++i) {
       empty.push_back(ground.clone());
       synthetic::addSensorNoise(empty.back(), 3.0, 100 + i);
     }
+    synthetic::PersonAppearance other;
+    other.shirt = {60, 140, 50};
+    other.trousers = {130, 120, 110};
     for (size_t f = 0; f < walk.frames.size(); ++f) {
       frames.push_back(ground.clone());
-      synthetic::drawPerson(frames.back(), camera, walk.frames[f].pose, shape, synthetic::PersonAppearance{});
+      // The farther person first.
+      const body::BodyPose& first = walk.frames[f].pose;
+      const bool second_behind = second && f < second->frames.size() &&
+                                 camera.depth(second->frames[f].pose.joints[body::kWaist]) >
+                                     camera.depth(first.joints[body::kWaist]);
+      if (second_behind) synthetic::drawPerson(frames.back(), camera, second->frames[f].pose, shape, other);
+      synthetic::drawPerson(frames.back(), camera, first, shape, synthetic::PersonAppearance{});
+      if (second && f < second->frames.size() && !second_behind)
+        synthetic::drawPerson(frames.back(), camera, second->frames[f].pose, shape, other);
       synthetic::addSensorNoise(frames.back(), 3.0, 200 + f);
     }
   }

@@ -17,12 +17,14 @@
 #include <cmath>
 #include <functional>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "kneed_walker/BodyPose.h"
+#include "kneed_walker/BodyPoseArray.h"
 #include "kneed_walker/core/vision/camera.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "joints_csv.h"
@@ -59,6 +61,9 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   TrackingStatus last;
   ros::Subscriber pose_sub = nh.subscribe<BodyPose>("/kneed_walker/body_pose", 100,
                                                     [&](const BodyPoseConstPtr& p) { poses[p->header.stamp] = *p; });
+  std::map<ros::Time, BodyPoseArray> arrays;
+  ros::Subscriber array_sub = nh.subscribe<BodyPoseArray>("/kneed_walker/body_poses", 100,
+                                                          [&](const BodyPoseArrayConstPtr& a) { arrays[a->header.stamp] = *a; });
   ros::Subscriber status_sub = nh.subscribe<TrackingStatus>("/kneed_walker/status", 100, [&](const TrackingStatusConstPtr& s) {
     statuses[s->header.stamp] = *s;
     last = *s;
@@ -134,7 +139,10 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   EXPECT_EQ(diagnostics["frames received"], std::to_string(sent));
   EXPECT_EQ(diagnostics["frames processed"], std::to_string(images.size()));
   EXPECT_EQ(diagnostics["restarts (stamps went back, images changed)"], "0");
-  EXPECT_EQ(diagnostics["particles"], std::to_string(particles));
+  EXPECT_EQ(diagnostics["particles per person"], std::to_string(particles));
+  // The walker is found, lost near the end of the walk and found again (the log says when).
+  EXPECT_GE(std::atoi(diagnostics["tracks started"].c_str()), 1) << diagnostics["tracks started"];
+  EXPECT_FALSE(diagnostics["people tracked"].empty());
   const double ess = std::stod(diagnostics["effective sample size"]);
   EXPECT_GT(ess, 0.0);
   EXPECT_LE(ess, particles);
@@ -177,6 +185,15 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
         << "frame " << f << ": the nodelet and track_offline disagree on whether it was tracked; the nodelet's status: "
         << statuses[images[f]->header.stamp].message << " (" << poses.size() << " poses)";
     if (pose == poses.end()) continue;
+    // ~body_poses holds every person's pose: here the one body's, as ~body_pose.
+    const auto array = arrays.find(images[f]->header.stamp);
+    ASSERT_NE(array, arrays.end()) << "frame " << f << ": a ~body_pose without a ~body_poses";
+    ASSERT_EQ(array->second.bodies.size(), 1u) << "frame " << f;
+    EXPECT_EQ(array->second.bodies[0].body_id, "1");
+    EXPECT_EQ(array->second.bodies[0].joint_positions, pose->second.joint_positions) << "frame " << f;
+    // Tracks running after the frame: none at the frame where the track is lost.
+    const TrackingStatus& status = statuses[images[f]->header.stamp];
+    EXPECT_EQ(status.people_tracked, status.state == TrackingStatus::TRACKING ? 1u : 0u) << "frame " << f;
     for (size_t j = 0; j < pose->second.joint_names.size(); ++j) {
       const std::string& name = pose->second.joint_names[j];
       const geometry_msgs::Point& p = pose->second.joint_positions[j];

@@ -19,7 +19,6 @@ namespace kneed_walker::ros_glue {
 // Options of the ROS wrapper itself (not of the tracking algorithm).
 struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
-  std::string body_id = "1";          // REP 155 body id: root frame "body_<body_id>"
   std::string image_transport = "raw";  // raw or compressed (image_transport plugins)
   int image_queue_size = 1;           // subscriber queue; frames arriving while one is tracked are dropped and counted
   bool publish_particle_cloud = true;  // ~particle_cloud (geometry_msgs/PoseArray)

@@ -116,6 +116,19 @@ void Tracker::project(const body::BodyPose& pose, vision::BodyOutlines& outlines
   vision::projectBodyParts(camera_, pose, shape(), outlines);
 }
 
+cv::Rect2d Tracker::imageBox(const body::BodyPose& pose) const {
+  vision::BodyOutlines outlines;
+  project(pose, outlines);
+  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (const vision::PartOutline& part : outlines)
+    if (part.visible)
+      for (int i = 0; i < part.size; ++i) {
+        x0 = std::min(x0, part.hull[i].x()), x1 = std::max(x1, part.hull[i].x());
+        y0 = std::min(y0, part.hull[i].y()), y1 = std::max(y1, part.hull[i].y());
+      }
+  return x0 <= x1 ? cv::Rect2d(cv::Point2d(x0, y0), cv::Point2d(x1, y1)) : cv::Rect2d();
+}
+
 double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const {
   const body::BodyPose pose = onGround(prior_pose, particle);
   thread_local vision::BodyOutlines outlines;
@@ -258,7 +271,9 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
       [&](TrackerParticle& p, int frame) { return weigh(p, frame, bank_[p.gait].prior->pose(p.body)); }, 0);
   timing_.particles_ms = msSince(particles_at);
   timing_.total_ms = msSince(started_at);
-  return estimate(report);
+  TrackEstimate e = estimate(report);
+  last_pose_ = e.pose;
+  return e;
 }
 
 void Tracker::stop() {
@@ -305,7 +320,9 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   timing_.particle_steps = steps_;
   frames_lost_ = report.max_log_likelihood < 0 || !std::isfinite(report.max_log_likelihood) ? frames_lost_ + 1 : 0;
   timing_.total_ms = msSince(started_at);
-  return estimate(report);
+  TrackEstimate e = estimate(report);
+  last_pose_ = e.pose;
+  return e;
 }
 
 double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random) {

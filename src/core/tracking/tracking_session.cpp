@@ -1,6 +1,9 @@
 #include "kneed_walker/core/tracking/tracking_session.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "kneed_walker/core/common/config_file.h"
@@ -28,7 +31,21 @@ std::vector<std::string> validate(const SessionOptions& o) {
                        std::to_string(o.min_start_speed_kmh) + " and " + std::to_string(o.max_start_speed_kmh) + ")");
   if (!(std::isfinite(d.min_fill) && d.min_fill >= 0 && d.min_fill <= 1))
     problems.push_back("detector.min_fill must be in [0, 1]");
+  if (!(o.max_people >= 1 && o.max_people <= 16))
+    problems.push_back("max_people = " + std::to_string(o.max_people) + " is outside [1, 16]");
+  if (!(std::isfinite(o.merge_distance_m) && o.merge_distance_m >= 0 && o.merge_distance_m <= 5))
+    problems.push_back("merge_distance_m = " + std::to_string(o.merge_distance_m) + " is outside [0, 5]");
   return problems;
+}
+
+TrackerFactory trackerFactory(const vision::Camera& camera, const vision::GroundPlane& ground,
+                              const gait::GaitTable& prior_table, const prior::PriorOptions& prior,
+                              const TrackerOptions& options, const vision::LikelihoodOptions& likelihood) {
+  return [=](int body) {
+    TrackerOptions own = options;
+    if (body > 1) own.seed = mixSeed(options.seed, 0, 1000 + static_cast<std::uint64_t>(body), 0);
+    return std::make_unique<Tracker>(camera, ground, prior_table, prior, own, likelihood);
+  };
 }
 
 const char* stateName(SessionState state) {
@@ -41,14 +58,49 @@ const char* stateName(SessionState state) {
   return "?";
 }
 
-TrackingSession::TrackingSession(std::unique_ptr<Tracker> tracker, const SessionOptions& options)
-    : tracker_(std::move(tracker)), options_(options) {
-  if (!tracker_) throw std::invalid_argument("TrackingSession needs a tracker");
+const PersonAnswer* SessionAnswer::person(int body) const {
+  for (const PersonAnswer& p : people)
+    if (p.body == body) return &p;
+  return nullptr;
+}
+
+bool SessionAnswer::started() const {
+  return std::any_of(people.begin(), people.end(), [](const PersonAnswer& p) { return p.started; });
+}
+
+TrackingSession::TrackingSession(TrackerFactory make_tracker, const SessionOptions& options)
+    : make_tracker_(std::move(make_tracker)), options_(options) {
+  if (!make_tracker_) throw std::invalid_argument("TrackingSession needs a tracker factory");
   common::throwIfInvalid("session options", validate(options));
+  slots_.resize(options.max_people);
+  slots_[0].tracker = make_tracker_(1);
+  if (!slots_[0].tracker) throw std::invalid_argument("the tracker factory made no tracker");
+}
+
+const Tracker& TrackingSession::tracker(int body) const {
+  if (body < 1 || body > static_cast<int>(slots_.size()))
+    throw std::out_of_range("body " + std::to_string(body) + " is not a slot of this session (1.." +
+                            std::to_string(slots_.size()) + ")");
+  const Slot& slot = slots_[body - 1];
+  return slot.tracker ? *slot.tracker : *slots_[0].tracker;
+}
+
+Tracker& TrackingSession::slotTracker(int slot) {
+  if (!slots_[slot].tracker) {
+    slots_[slot].tracker = make_tracker_(slot + 1);
+    if (!background_.empty()) slots_[slot].tracker->setBackground(background_);
+  }
+  return *slots_[slot].tracker;
+}
+
+int TrackingSession::trackCount() const {
+  return static_cast<int>(std::count_if(slots_.begin(), slots_.end(), [](const Slot& s) { return s.running(); }));
 }
 
 void TrackingSession::setBackground(vision::BackgroundModel background) {
-  tracker_->setBackground(std::move(background));
+  for (Slot& slot : slots_)
+    if (slot.tracker) slot.tracker->setBackground(background);  // shares the model's pixels
+  background_ = std::move(background);
   background_given_ = true;
   if (state_ == SessionState::kLearningBackground) state_ = SessionState::kWaitingForPerson;
   held_.clear();
@@ -57,13 +109,13 @@ void TrackingSession::setBackground(vision::BackgroundModel background) {
 void TrackingSession::startFrom(const InitialGuess& guess) { pending_guess_ = guess; }
 
 void TrackingSession::startFromBox(const cv::Rect2d& box_px) {
-  pending_guess_ = guessFromBox(tracker_->camera(), tracker_->ground(), box_px);
+  pending_guess_ = guessFromBox(tracker().camera(), tracker().ground(), box_px);
   pending_guess_->min_speed_kmh = options_.min_start_speed_kmh;
   pending_guess_->max_speed_kmh = options_.max_start_speed_kmh;
 }
 
 std::vector<SessionAnswer> TrackingSession::feed(const cv::Mat& bgr, double stamp_s) {
-  const vision::Camera& camera = tracker_->camera();
+  const vision::Camera& camera = tracker().camera();
   if (bgr.type() != CV_8UC3 || bgr.cols != camera.width() || bgr.rows != camera.height())
     throw std::invalid_argument("the frame is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) +
                                 " with " + std::to_string(bgr.channels()) + " channels; the camera's is " +
@@ -80,105 +132,185 @@ std::vector<SessionAnswer> TrackingSession::flushHeld() {
   if (held_.empty()) return {};
   std::vector<cv::Mat> frames;
   for (const auto& [frame, stamp] : held_) frames.push_back(frame);
-  tracker_->setBackground(vision::BackgroundModel::learn(frames));
-  state_ = SessionState::kWaitingForPerson;
+  std::vector<std::pair<cv::Mat, double>> held = std::move(held_);
+  setBackground(vision::BackgroundModel::learn(frames));
+  background_given_ = false;  // learned from the input: reset() learns again
   std::vector<SessionAnswer> answers;
-  const int first = next_input_ - static_cast<int>(held_.size());
-  for (size_t i = 0; i < held_.size(); ++i)
-    answers.push_back(process(held_[i].first, held_[i].second, first + static_cast<int>(i)));
-  held_.clear();
+  const int first = next_input_ - static_cast<int>(held.size());
+  for (size_t i = 0; i < held.size(); ++i)
+    answers.push_back(process(held[i].first, held[i].second, first + static_cast<int>(i)));
   return answers;
 }
 
+bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
+                                 PersonAnswer& person, SessionAnswer& answer) {
+  Slot& slot = slots_[s];
+  TrackEstimate estimate;
+  try {
+    estimate = slotTracker(s).start(bgr, stamp_s, guess);
+  } catch (const std::invalid_argument& e) {
+    // The guess does not fit the image (e.g. a box around no person): the frame is
+    // answered as waiting and the person is looked for in the image instead.
+    answer.start_failed = true;
+    answer.message = std::string("could not start from the guess: ") + e.what();
+    return false;
+  }
+  slot.started_input = input;
+  slot.track_inputs.emplace_back(input, stamp_s);
+  person.started = true;
+  char text[160];
+  std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess.position_m.x(),
+                guess.position_m.y(),
+                guess.heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess.heading_rad) + " rad").c_str());
+  person.message = text;
+  collectMapFrames(slot, person);
+  person.estimate = estimate;
+  return true;
+}
+
 SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
+  const auto began = std::chrono::steady_clock::now();
   SessionAnswer answer;
   answer.input = input;
   answer.stamp_s = stamp_s;
-  TrackEstimate estimate;
-  if (pending_guess_ || !tracker_->started()) {
-    std::optional<InitialGuess> guess = pending_guess_;
-    if (!guess && options_.find_people) guess = guessFromSightings(bgr, input);
-    if (!guess) {
-      state_ = answer.state = SessionState::kWaitingForPerson;
-      answer.message = options_.find_people ? "looking for a walking person" : "waiting for the person's box";
-      return answer;
+  const int slots = static_cast<int>(slots_.size());
+  std::vector<PersonAnswer> people(slots);
+  for (int s = 0; s < slots; ++s) people[s].body = s + 1;
+  auto waist = [&](int s) { return people[s].estimate->pose.joints[body::kWaist].head<2>().eval(); };
+
+  // A given guess goes to a free slot, else replaces the running track nearest to it.
+  int given = -1;
+  if (pending_guess_) {
+    for (int s = 0; s < slots && given < 0; ++s)
+      if (!slots_[s].running()) given = s;
+    if (given < 0) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (int s = 0; s < slots; ++s) {
+        const double d = (slots_[s].tracker->lastPose().joints[body::kWaist].head<2>() - pending_guess_->position_m).norm();
+        if (d < nearest) nearest = d, given = s;
+      }
     }
-    if (tracker_->started()) answer.map_frames = endTrack();
+  }
+  // The running tracks: this frame's step; a lost track ends.
+  for (int s = 0; s < slots; ++s) {
+    Slot& slot = slots_[s];
+    if (!slot.running() || s == given) continue;
+    PersonAnswer& person = people[s];
+    const TrackEstimate estimate = slot.tracker->track(bgr, stamp_s);
+    slot.track_inputs.emplace_back(input, stamp_s);
+    collectMapFrames(slot, person);
+    person.estimate = estimate;
+    if (estimate.lost) {
+      last_seen_m_ = waist(s);
+      for (MapFrame& frame : endTrack(slot)) person.map_frames.push_back(std::move(frame));
+      person.ended = true;
+      person.message = "lost: the best particle explains the image worse than the background; looking again";
+    }
+  }
+  // Two tracks on one person: the newer ends.
+  for (int a = 0; a < slots; ++a)
+    for (int b = 0; b < slots; ++b) {
+      if (a == b || !slots_[a].running() || !slots_[b].running() || !people[a].estimate || !people[b].estimate) continue;
+      const bool b_newer = slots_[b].started_input > slots_[a].started_input ||
+                           (slots_[b].started_input == slots_[a].started_input && b > a);
+      if (!b_newer || (waist(a) - waist(b)).norm() >= options_.merge_distance_m) continue;
+      for (MapFrame& frame : endTrack(slots_[b])) people[b].map_frames.push_back(std::move(frame));
+      people[b].ended = true;
+      people[b].message = "merged with body " + std::to_string(a + 1) + ": both followed one person; ended";
+    }
+  // New tracks: from the given guess, else from the people found walking (in slots free since
+  // before this frame).
+  if (pending_guess_) {
+    const InitialGuess guess = *pending_guess_;
     pending_guess_.reset();
     sightings_.clear();
-    try {
-      estimate = tracker_->start(bgr, stamp_s, *guess);
-    } catch (const std::invalid_argument& e) {
-      // The guess does not fit the image (e.g. a box around no person): the frame is
-      // answered as waiting and the person is looked for in the image instead.
-      state_ = answer.state = SessionState::kWaitingForPerson;
-      answer.start_failed = true;
-      answer.message = std::string("could not start from the guess: ") + e.what();
-      return answer;
+    if (slots_[given].running()) {
+      for (MapFrame& frame : endTrack(slots_[given])) people[given].map_frames.push_back(std::move(frame));
+      people[given].ended = true;
+      people[given].message = "replaced by the track of a given guess";
     }
-    answer.started = true;
-    char text[160];
-    std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess->position_m.x(),
-                  guess->position_m.y(),
-                  guess->heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess->heading_rad) + " rad").c_str());
-    answer.message = text;
-  } else {
-    estimate = tracker_->track(bgr, stamp_s);
+    startTrack(given, bgr, stamp_s, input, guess, people[given], answer);
+  } else if (options_.find_people) {
+    std::vector<int> free;
+    for (int s = 0; s < slots; ++s)
+      if (!slots_[s].running() && !people[s].ended) free.push_back(s);
+    if (!free.empty()) {
+      size_t next = 0;
+      for (const InitialGuess& guess : guessesFromSightings(bgr, input)) {
+        if (next == free.size()) break;
+        if (startTrack(free[next], bgr, stamp_s, input, guess, people[free[next]], answer)) ++next;
+      }
+      if (next == free.size()) sightings_.clear();
+    }
   }
-  track_inputs_.emplace_back(input, stamp_s);
-  collectMapFrames(answer);
-  answer.estimate = estimate;
-  if (estimate.lost) {
-    state_ = answer.state = SessionState::kLost;
-    last_seen_m_ = estimate.pose.joints[body::kWaist].head<2>();
-    for (MapFrame& frame : endTrack()) answer.map_frames.push_back(std::move(frame));
-    answer.message = "lost: the best particle explains the image worse than the background; looking again";
-  } else {
-    state_ = answer.state = SessionState::kTracking;
+
+  bool tracking = false, lost = false;
+  for (PersonAnswer& person : people) {
+    if (!person.estimate && !person.ended) continue;
+    if (person.estimate) (person.estimate->lost ? lost : tracking) = true;
+    answer.people.push_back(std::move(person));
   }
+  state_ = answer.state = tracking ? SessionState::kTracking : lost ? SessionState::kLost : SessionState::kWaitingForPerson;
+  if (!tracking && !answer.start_failed)
+    answer.message = lost ? "lost: looking for people again"
+                          : options_.find_people ? "looking for a walking person" : "waiting for the person's box";
+  last_frame_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - began).count();
   return answer;
 }
 
-void TrackingSession::collectMapFrames(SessionAnswer& answer) {
+void TrackingSession::collectMapFrames(Slot& slot, PersonAnswer& person) {
   // The MAP state sequence's oldest buffered frame is final once Δs later frames weighed it.
   // A tracker that keeps the whole path gives it all when the track ends instead.
-  if (tracker_->keepsWholePath()) return;
+  const Tracker& tracker = *slot.tracker;
+  if (tracker.keepsWholePath()) return;
   std::vector<int> frames;
-  const std::vector<body::BodyPose> poses = tracker_->mapPoses(&frames);
-  if (frames.empty() || static_cast<int>(frames.size()) < tracker_->lagFrames() + 1) return;
-  if (frames.front() <= map_written_) return;
-  map_written_ = frames.front();
-  const auto& [input, stamp] = track_inputs_.at(frames.front());
-  answer.map_frames.push_back({input, stamp, poses.front()});
+  const std::vector<body::BodyPose> poses = tracker.mapPoses(&frames);
+  if (frames.empty() || static_cast<int>(frames.size()) < tracker.lagFrames() + 1) return;
+  if (frames.front() <= slot.map_written) return;
+  slot.map_written = frames.front();
+  const auto& [input, stamp] = slot.track_inputs.at(frames.front());
+  person.map_frames.push_back({input, stamp, poses.front()});
 }
 
-std::vector<MapFrame> TrackingSession::endTrack() {
+std::vector<MapFrame> TrackingSession::endTrack(Slot& slot) {
   std::vector<MapFrame> rest;
-  if (tracker_->started()) {
+  if (slot.running()) {
     std::vector<int> frames;
     const std::vector<body::BodyPose> poses =
-        tracker_->keepsWholePath() ? tracker_->wholeMapPoses(&frames) : tracker_->mapPoses(&frames);
+        slot.tracker->keepsWholePath() ? slot.tracker->wholeMapPoses(&frames) : slot.tracker->mapPoses(&frames);
     for (size_t i = 0; i < frames.size(); ++i) {
-      if (frames[i] <= map_written_) continue;
-      const auto& [input, stamp] = track_inputs_.at(frames[i]);
+      if (frames[i] <= slot.map_written) continue;
+      const auto& [input, stamp] = slot.track_inputs.at(frames[i]);
       rest.push_back({input, stamp, poses[i]});
     }
-    tracker_->stop();
+    slot.tracker->stop();
   }
-  track_inputs_.clear();
-  map_written_ = -1;
+  slot.track_inputs.clear();
+  slot.map_written = -1;
+  slot.started_input = -1;
   return rest;
 }
 
-std::optional<InitialGuess> TrackingSession::guessFromSightings(const cv::Mat& bgr, int input) {
+std::vector<InitialGuess> TrackingSession::guessesFromSightings(const cv::Mat& bgr, int input) {
+  const Tracker& any = tracker();
   std::vector<Sighting> now;
   for (const vision::PersonCandidate& person :
-       vision::findPeople(tracker_->background(), bgr, tracker_->camera(), tracker_->ground(), options_.detector))
-    now.push_back({input, person});
+       vision::findPeople(background_, bgr, any.camera(), any.ground(), options_.detector)) {
+    // Someone already tracked: their blob touches the tracked body's image box, or stands
+    // within a stride of its waist.
+    const cv::Point2d centre = (person.box_px.tl() + person.box_px.br()) * 0.5;
+    const bool tracked = std::any_of(slots_.begin(), slots_.end(), [&](const Slot& slot) {
+      if (!slot.running()) return false;
+      const body::BodyPose& pose = slot.tracker->lastPose();
+      return slot.tracker->imageBox(pose).contains(centre) ||
+             (pose.joints[body::kWaist].head<2>() - person.ground_xy_m).norm() < 0.8;
+    });
+    if (!tracked) now.push_back({input, person});
+  }
   while (!sightings_.empty() && (sightings_.front().empty() || sightings_.front().front().input < input - options_.heading_frames))
     sightings_.pop_front();
   sightings_.push_back(now);
-  if (sightings_.front().empty() || sightings_.front().front().input != input - options_.heading_frames) return std::nullopt;
+  if (sightings_.front().empty() || sightings_.front().front().input != input - options_.heading_frames) return {};
   // Nearest first to where a lost track was last seen, else the largest first.
   std::vector<const Sighting*> order;
   for (const Sighting& s : now) order.push_back(&s);
@@ -186,6 +318,7 @@ std::optional<InitialGuess> TrackingSession::guessFromSightings(const cv::Mat& b
     std::stable_sort(order.begin(), order.end(), [&](const Sighting* a, const Sighting* b) {
       return (a->person.ground_xy_m - *last_seen_m_).norm() < (b->person.ground_xy_m - *last_seen_m_).norm();
     });
+  std::vector<InitialGuess> guesses;
   for (const Sighting* current : order) {
     const cv::Point2d centre = (current->person.box_px.tl() + current->person.box_px.br()) * 0.5;
     const Sighting* before = nullptr;
@@ -203,20 +336,33 @@ std::optional<InitialGuess> TrackingSession::guessFromSightings(const cv::Mat& b
     guess.heading_sd_rad = 0.5;
     guess.min_speed_kmh = options_.min_start_speed_kmh;
     guess.max_speed_kmh = options_.max_start_speed_kmh;
-    return guess;
+    guesses.push_back(guess);
   }
-  return std::nullopt;
+  return guesses;
 }
 
-std::vector<MapFrame> TrackingSession::finish() { return endTrack(); }
+std::vector<PersonAnswer> TrackingSession::finish() {
+  std::vector<PersonAnswer> ended;
+  for (int s = 0; s < static_cast<int>(slots_.size()); ++s) {
+    if (!slots_[s].running()) continue;
+    PersonAnswer person;
+    person.body = s + 1;
+    person.ended = true;
+    person.map_frames = endTrack(slots_[s]);
+    person.message = "the input ended";
+    ended.push_back(std::move(person));
+  }
+  return ended;
+}
 
 void TrackingSession::reset() {
-  endTrack();
+  for (Slot& slot : slots_) endTrack(slot);
   held_.clear();
   pending_guess_.reset();
   sightings_.clear();
   last_seen_m_.reset();
   next_input_ = 0;
+  if (!background_given_) background_ = vision::BackgroundModel{};
   state_ = background_given_ ? SessionState::kWaitingForPerson : SessionState::kLearningBackground;
 }
 

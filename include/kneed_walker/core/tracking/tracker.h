@@ -127,6 +127,10 @@ class Tracker {
   body::BodyPose pose(const TrackerParticle& particle) const;
   // Its parts' image outlines.
   void project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const;
+  // The bounding box of a pose's visible projected parts, px (empty when none is in view).
+  cv::Rect2d imageBox(const body::BodyPose& pose) const;
+  // The MAP pose of the last frame started or tracked.
+  const body::BodyPose& lastPose() const { return last_pose_; }
   // The person's body parts (for the person's height).
   const body::BodyShape& shape() const;
 
@@ -166,6 +170,7 @@ class Tracker {
   int frame_ = 0;
   double stamp_s_ = 0, dt_s_ = 0;
   int frames_lost_ = 0;
+  body::BodyPose last_pose_;
   TrackerTiming timing_;
 };
 

@@ -3,18 +3,24 @@
 // offline. The session
 //   * learns the background from the first `background_frames` frames when none is given,
 //     holding them and then tracking through them (so no frame goes unanswered);
-//   * starts a track from a guess or a box when given one, and otherwise finds the person
-//     itself (vision/person_detector.h): a blob the size of a person, seen again
-//     `heading_frames` later nearby, gives the position and the walking direction;
-//   * reports a lost track (TrackEstimate::lost) and looks for the person again;
+//   * tracks up to `max_people` people at once, one Tracker each, in body slots 1..max_people
+//     (the REP 155 body id a slot's tracks are published under); the frame, the background
+//     model and the search for people are shared, each tracker weighs its own region;
+//   * starts a track from a guess or a box when given one, and otherwise finds people itself
+//     (vision/person_detector.h): a blob the size of a person, away from every track, seen
+//     again `heading_frames` later nearby, gives the position and the walking direction;
+//   * ends a track that is lost (TrackEstimate::lost: the person left, or is hidden) or that
+//     has merged with an older one (their waists nearer than `merge_distance_m`), and looks
+//     for people again;
 //   * keeps the MAP state sequence (paper §4: the ancestry of the best particle, final Δs
-//     frames later) per input frame.
+//     frames later) per input frame and person.
 // Frames must come in order of stamp; reset() starts over (a bag that loops).
 #pragma once
 
 #include <opencv2/core.hpp>
 
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,17 +41,30 @@ struct SessionOptions {
   // the slow walks, as the demo's track_offline --min-speed 1.5.
   double min_start_speed_kmh = 3.0;  // [0, 20]
   double max_start_speed_kmh = 6.0;  // [min_start_speed_kmh, 20]
+  int max_people = 1;              // people tracked at once, [1, 16]; each costs a tracker's time
+  // Two tracks whose waists come nearer than this on the ground follow one person: the newer
+  // ends, m, [0, 5]. (People walking side by side keep about 0.6 m between their waists.)
+  double merge_distance_m = 0.35;
   vision::PersonDetectorOptions detector;
 };
+
+// Makes the tracker of a body slot (1..max_people). The trackers of a session differ only in
+// their seed: see trackerFactory.
+using TrackerFactory = std::function<std::unique_ptr<Tracker>(int body)>;
+// Trackers with these arguments (tracker.h), body 1's seeded with options.seed (a lone person
+// is tracked exactly as by one Tracker), body b's with a seed mixed from it and b.
+TrackerFactory trackerFactory(const vision::Camera& camera, const vision::GroundPlane& ground,
+                              const gait::GaitTable& prior_table, const prior::PriorOptions& prior,
+                              const TrackerOptions& options, const vision::LikelihoodOptions& likelihood = {});
 
 // Every problem with the options, naming the field; empty when usable.
 std::vector<std::string> validate(const SessionOptions& options);
 
 enum class SessionState {
   kLearningBackground,  // frames are held until the background is learned
-  kWaitingForPerson,    // no guess or box given and nobody found yet
-  kTracking,            // an estimate for this frame
-  kLost,                // the track was lost at this frame; the person is looked for again
+  kWaitingForPerson,    // nobody is tracked: no guess or box given and nobody found yet
+  kTracking,            // someone is tracked at this frame
+  kLost,                // every track was lost at this frame; people are looked for again
 };
 const char* stateName(SessionState state);
 
@@ -56,31 +75,47 @@ struct MapFrame {
   body::BodyPose pose;
 };
 
+// One body slot's part of a frame's answer: there is one for each slot whose track ran, started
+// or ended at the frame.
+struct PersonAnswer {
+  int body = 1;          // the slot, 1..max_people: the REP 155 body id
+  bool started = false;  // a track started in this slot at this frame
+  // The slot's track ended at this frame (lost, merged into an older track, replaced by a given
+  // guess); a track started at the same frame is a new one.
+  bool ended = false;
+  std::optional<TrackEstimate> estimate;  // this frame's filtered estimate (none when ended before it)
+  // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
+  // of a track when it ends (a tracker that keeps the whole path: all of the track when it ends).
+  std::vector<MapFrame> map_frames;
+  std::string message;  // what happened, for people (started where, lost, merged)
+};
+
 struct SessionAnswer {
   int input = 0;  // the frame's index among the frames fed since the last reset(), from 0
   double stamp_s = 0;
   SessionState state = SessionState::kWaitingForPerson;
-  bool started = false;                   // a track started at this frame
-  bool start_failed = false;              // a given guess or box could not start a track (message says why)
-  std::optional<TrackEstimate> estimate;  // this frame's filtered estimate (kTracking, kLost)
-  // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
-  // of a track when it ends (a tracker that keeps the whole path: all of the track when it ends).
-  std::vector<MapFrame> map_frames;
-  std::string message;  // what happened, for people (why waiting, lost, started)
+  bool start_failed = false;         // a given guess or box could not start a track (message says why)
+  std::vector<PersonAnswer> people;  // in order of body
+  std::string message;               // why nobody is tracked, or why a given guess failed
+  // The answer for a body, or nullptr.
+  const PersonAnswer* person(int body) const;
+  bool started() const;  // some track started at this frame
 };
 
 class TrackingSession {
  public:
-  // Throws std::invalid_argument naming bad options.
-  TrackingSession(std::unique_ptr<Tracker> tracker, const SessionOptions& options = {});
+  // Throws std::invalid_argument naming bad options (the session's, or the trackers' as the
+  // factory's first tracker refuses them).
+  TrackingSession(TrackerFactory make_tracker, const SessionOptions& options = {});
 
   // A background given (an image of the empty scene, or frames sampled by the caller): no
   // frames are held to learn one.
   void setBackground(vision::BackgroundModel background);
-  // The next frame starts a track from this guess (replacing any track).
+  // The next frame starts a track from this guess, in a free slot, else replacing the track
+  // nearest to it (with max_people 1: replacing any track).
   void startFrom(const InitialGuess& guess);
-  // The next frame starts a track from the person in this box (heading unknown). Throws
-  // std::invalid_argument when the box's bottom does not see the ground.
+  // The next frame starts a track from the person in this box (heading unknown), as startFrom.
+  // Throws std::invalid_argument when the box's bottom does not see the ground.
   void startFromBox(const cv::Rect2d& box_px);
 
   // One frame (BGR 8-bit, the camera's size; else std::invalid_argument and nothing changes).
@@ -90,38 +125,55 @@ class TrackingSession {
   // At the end of an input shorter than background_frames: learns from the frames held so
   // far and answers them.
   std::vector<SessionAnswer> flushHeld();
-  // The rest of the current track's MAP state sequence (end of input); ends the track.
-  std::vector<MapFrame> finish();
+  // The rest of the current tracks' MAP state sequences (end of input), by body; ends them.
+  std::vector<PersonAnswer> finish();
   // Forgets the track, the held frames and a background learned from them (a given one is
   // kept); frames are counted from 0 again.
   void reset();
 
   SessionState state() const { return state_; }
-  const Tracker& tracker() const { return *tracker_; }
+  // A slot's tracker, 1..max_people (made when the slot is first used; before, body 1's, made
+  // at construction: the camera, ground, background and settings every slot's tracker shares).
+  const Tracker& tracker(int body = 1) const;
   int framesFed() const { return next_input_; }
+  int trackCount() const;  // tracks running now
+  // Wall time of the last fed frame's tracking, all tracks and the search for people, ms.
+  double lastFrameMs() const { return last_frame_ms_; }
 
  private:
   struct Sighting {
     int input = 0;
     vision::PersonCandidate person;
   };
+  struct Slot {
+    std::unique_ptr<Tracker> tracker;  // made when first used
+    int started_input = -1;            // the input its track started at (the older track wins a merge)
+    std::vector<std::pair<int, double>> track_inputs;  // per tracker frame: input index, stamp
+    int map_written = -1;              // the last tracker frame given as a MapFrame
+    bool running() const { return tracker && tracker->started(); }
+  };
   SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
-  // A guess from the people seen now and heading_frames ago; nullopt while nobody qualifies.
-  std::optional<InitialGuess> guessFromSightings(const cv::Mat& bgr, int input);
-  std::vector<MapFrame> endTrack();
-  void collectMapFrames(SessionAnswer& answer);
+  // Guesses from the people seen now and heading_frames ago, away from the running tracks.
+  std::vector<InitialGuess> guessesFromSightings(const cv::Mat& bgr, int input);
+  // Starts slot's track at this frame; false (and the answer says why) when the guess cannot.
+  bool startTrack(int slot, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
+                  PersonAnswer& person, SessionAnswer& answer);
+  std::vector<MapFrame> endTrack(Slot& slot);
+  void collectMapFrames(Slot& slot, PersonAnswer& person);
+  Tracker& slotTracker(int slot);
 
-  std::unique_ptr<Tracker> tracker_;
+  TrackerFactory make_tracker_;
   SessionOptions options_;
+  std::vector<Slot> slots_;  // max_people; slot s is body s + 1
+  vision::BackgroundModel background_;
   bool background_given_ = false;
   SessionState state_ = SessionState::kLearningBackground;
   std::vector<std::pair<cv::Mat, double>> held_;  // frames held to learn the background
   std::optional<InitialGuess> pending_guess_;
   std::deque<std::vector<Sighting>> sightings_;   // the people found in the last frames
-  std::optional<Eigen::Vector2d> last_seen_m_;    // where a lost track last was
-  std::vector<std::pair<int, double>> track_inputs_;  // per tracker frame: input index, stamp
-  int map_written_ = -1;                          // the last tracker frame given as a MapFrame
+  std::optional<Eigen::Vector2d> last_seen_m_;    // where the last lost track last was
   int next_input_ = 0;
+  double last_frame_ms_ = 0;
 };
 
 }  // namespace kneed_walker::core::tracking
