@@ -136,6 +136,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("gait_change_probability", t.gait_change_probability);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
+  reader.read("use_optical_flow", config.likelihood.use_flow);
 
   RosInterfaceOptions& r = config.ros;
   reader.read("world_frame", r.world_frame);
@@ -165,6 +166,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("max_start_speed_kmh", session.max_start_speed_kmh);
   reader.read("max_people", session.max_people);
   reader.read("merge_distance_m", session.merge_distance_m);
+  reader.read("reacquire_distance_m", session.reacquire_distance_m);
   for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
   if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
     reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +

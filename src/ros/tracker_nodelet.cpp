@@ -350,7 +350,8 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
   }
   const kw::vision::GroundPlane ground = file_camera_ ? file_ground_ : kw::vision::GroundPlane{};
   session_ = std::make_unique<kw::tracking::TrackingSession>(
-      kw::tracking::trackerFactory(*camera, ground, prior_table_, priorOptions(), config_.tracker), config_.session);
+      kw::tracking::trackerFactory(*camera, ground, prior_table_, priorOptions(), config_.tracker, config_.likelihood),
+      config_.session);
   session_size_ = size;
   session_frame_id_ = frame.image->header.frame_id;
   const auto& b = config_.ros.init_box;

@@ -247,6 +247,35 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
   }
 }
 
+// The demo's parameters for several people (config/pets_people.yaml) load as written; a bad
+// max_people or use_optical_flow is refused by name, and body_id is no longer a parameter (the
+// bodies' ids are their slots).
+TEST(TrackerNodelet, SeveralPeopleParametersLoadAndBadOnesAreNamed) {
+  ros::NodeHandle people("/people_parameters");
+  people.setParam("max_people", 10);
+  people.setParam("use_optical_flow", false);
+  people.setParam("merge_distance_m", 0.5);
+  people.setParam("reacquire_distance_m", 0.0);
+  const TrackerNodeConfig config = loadTrackerNodeConfig(people);
+  EXPECT_EQ(config.session.max_people, 10);
+  EXPECT_FALSE(config.likelihood.use_flow);
+  EXPECT_DOUBLE_EQ(config.session.merge_distance_m, 0.5);
+  EXPECT_DOUBLE_EQ(config.session.reacquire_distance_m, 0.0);
+  ros::NodeHandle bad("/bad_people_parameters");
+  bad.setParam("max_people", 0);
+  bad.setParam("use_optical_flow", "no");
+  bad.setParam("body_id", "1");
+  try {
+    loadTrackerNodeConfig(bad);
+    FAIL() << "bad parameters were accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("max_people = 0 is outside [1, 16]"), std::string::npos) << what;
+    EXPECT_NE(what.find("/bad_people_parameters/use_optical_flow must be"), std::string::npos) << what;
+    EXPECT_NE(what.find("/bad_people_parameters/body_id is not a parameter"), std::string::npos) << what;
+  }
+}
+
 // Setting only the particle count works: the resampling threshold follows it (N / 10); one
 // set above the count is refused saying how to fix it.
 TEST(TrackerNodelet, TheResamplingThresholdFollowsTheParticleCount) {

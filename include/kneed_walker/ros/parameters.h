@@ -13,6 +13,7 @@
 
 #include "kneed_walker/core/tracking/tracker_options.h"
 #include "kneed_walker/core/tracking/tracking_session.h"
+#include "kneed_walker/core/vision/likelihood.h"
 
 namespace kneed_walker::ros_glue {
 
@@ -37,6 +38,7 @@ struct RosInterfaceOptions {
 
 struct TrackerNodeConfig {
   core::tracking::TrackerOptions tracker;
+  core::vision::LikelihoodOptions likelihood;
   core::tracking::SessionOptions session;
   RosInterfaceOptions ros;
 };

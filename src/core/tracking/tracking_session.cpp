@@ -35,6 +35,8 @@ std::vector<std::string> validate(const SessionOptions& o) {
     problems.push_back("max_people = " + std::to_string(o.max_people) + " is outside [1, 16]");
   if (!(std::isfinite(o.merge_distance_m) && o.merge_distance_m >= 0 && o.merge_distance_m <= 5))
     problems.push_back("merge_distance_m = " + std::to_string(o.merge_distance_m) + " is outside [0, 5]");
+  if (!(std::isfinite(o.reacquire_distance_m) && o.reacquire_distance_m >= 0 && o.reacquire_distance_m <= 5))
+    problems.push_back("reacquire_distance_m = " + std::to_string(o.reacquire_distance_m) + " is outside [0, 5]");
   return problems;
 }
 
@@ -218,8 +220,8 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
       people[b].ended = true;
       people[b].message = "merged with body " + std::to_string(a + 1) + ": both followed one person; ended";
     }
-  // New tracks: from the given guess, else from the people found walking (in slots free since
-  // before this frame).
+  // New tracks: from the given guess; else those lost at the last frame and found again there,
+  // and the people found walking (in the slots free since before this frame).
   if (pending_guess_) {
     const InitialGuess guess = *pending_guess_;
     pending_guess_.reset();
@@ -229,18 +231,55 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
       people[given].ended = true;
       people[given].message = "replaced by the track of a given guess";
     }
+    slots_[given].reacquire.reset();
     startTrack(given, bgr, stamp_s, input, guess, people[given], answer);
   } else if (options_.find_people) {
-    std::vector<int> free;
-    for (int s = 0; s < slots; ++s)
+    for (int s = 0; s < slots; ++s) {
+      if (!slots_[s].reacquire) continue;
+      const InitialGuess guess = *slots_[s].reacquire;
+      slots_[s].reacquire.reset();
+      if (startTrack(s, bgr, stamp_s, input, guess, people[s], answer))
+        people[s].message = "found again where lost: " + people[s].message;
+    }
+    std::vector<int> free, lost_now;
+    for (int s = 0; s < slots; ++s) {
       if (!slots_[s].running() && !people[s].ended) free.push_back(s);
-    if (!free.empty()) {
-      size_t next = 0;
-      for (const InitialGuess& guess : guessesFromSightings(bgr, input)) {
-        if (next == free.size()) break;
-        if (startTrack(free[next], bgr, stamp_s, input, guess, people[free[next]], answer)) ++next;
+      if (people[s].ended && people[s].estimate && people[s].estimate->lost) lost_now.push_back(s);
+    }
+    if (!free.empty() || !lost_now.empty()) {
+      std::vector<vision::PersonCandidate> found = untrackedPeople(bgr);
+      // A lost person is looked for where the track lost them: the nearest person found within
+      // reacquire_distance_m starts the slot's track again at the next frame, walking the lost
+      // heading (at the next frame: a track's frames are its own, and a given guess may come).
+      for (const int s : lost_now) {
+        const TrackEstimate& lost = *people[s].estimate;
+        auto nearest = found.end();
+        double best = options_.reacquire_distance_m;
+        for (auto it = found.begin(); it != found.end(); ++it) {
+          const double d = (it->ground_xy_m - lost.pose.joints[body::kWaist].head<2>()).norm();
+          if (d < best) best = d, nearest = it;
+        }
+        if (nearest == found.end()) continue;
+        InitialGuess guess;
+        guess.position_m = nearest->ground_xy_m;
+        guess.heading_rad = lost.heading_rad;
+        guess.heading_sd_rad = 0.6;
+        guess.min_speed_kmh = options_.min_start_speed_kmh;
+        guess.max_speed_kmh = options_.max_start_speed_kmh;
+        slots_[s].reacquire = guess;
+        found.erase(nearest);
+        char text[96];
+        std::snprintf(text, sizeof text, "; someone is %.2f m away: starting again there at the next frame", best);
+        people[s].message += text;
       }
-      if (next == free.size()) sightings_.clear();
+      if (!free.empty()) {
+        size_t next = 0;
+        for (const InitialGuess& guess : guessesFromSightings(std::move(found), input)) {
+          if (next == free.size()) break;
+          if (startTrack(free[next], bgr, stamp_s, input, guess, people[free[next]], answer)) ++next;
+        }
+        if (next == free.size()) sightings_.clear();
+      }
     }
   }
 
@@ -291,13 +330,13 @@ std::vector<MapFrame> TrackingSession::endTrack(Slot& slot) {
   return rest;
 }
 
-std::vector<InitialGuess> TrackingSession::guessesFromSightings(const cv::Mat& bgr, int input) {
+std::vector<vision::PersonCandidate> TrackingSession::untrackedPeople(const cv::Mat& bgr) const {
   const Tracker& any = tracker();
-  std::vector<Sighting> now;
+  std::vector<vision::PersonCandidate> untracked;
   for (const vision::PersonCandidate& person :
        vision::findPeople(background_, bgr, any.camera(), any.ground(), options_.detector)) {
-    // Someone already tracked: their blob touches the tracked body's image box, or stands
-    // within a stride of its waist.
+    // Someone already tracked: their blob's centre is inside the tracked body's image box, or
+    // they stand within a stride of its waist.
     const cv::Point2d centre = (person.box_px.tl() + person.box_px.br()) * 0.5;
     const bool tracked = std::any_of(slots_.begin(), slots_.end(), [&](const Slot& slot) {
       if (!slot.running()) return false;
@@ -305,8 +344,14 @@ std::vector<InitialGuess> TrackingSession::guessesFromSightings(const cv::Mat& b
       return slot.tracker->imageBox(pose).contains(centre) ||
              (pose.joints[body::kWaist].head<2>() - person.ground_xy_m).norm() < 0.8;
     });
-    if (!tracked) now.push_back({input, person});
+    if (!tracked) untracked.push_back(person);
   }
+  return untracked;
+}
+
+std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<vision::PersonCandidate> people, int input) {
+  std::vector<Sighting> now;
+  for (vision::PersonCandidate& person : people) now.push_back({input, std::move(person)});
   while (!sightings_.empty() && (sightings_.front().empty() || sightings_.front().front().input < input - options_.heading_frames))
     sightings_.pop_front();
   sightings_.push_back(now);
@@ -356,7 +401,10 @@ std::vector<PersonAnswer> TrackingSession::finish() {
 }
 
 void TrackingSession::reset() {
-  for (Slot& slot : slots_) endTrack(slot);
+  for (Slot& slot : slots_) {
+    endTrack(slot);
+    slot.reacquire.reset();
+  }
   held_.clear();
   pending_guess_.reset();
   sightings_.clear();

@@ -245,7 +245,8 @@ const test::RenderedWalk& twoPeople() {
 }
 
 // Two people walking the other way from each other, 7 m apart: with up to three tracks, the
-// session finds both by itself and follows each with a track of its own, and starts no third.
+// session finds both by itself and follows each with a track of its own, and starts no third; a
+// track that loses its person starts again in its slot at the next frame, where they are.
 TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
   const test::RenderedWalk& s = twoPeople();
   SessionOptions options = holding(10);
@@ -254,9 +255,17 @@ TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
   std::array<double, 2> error_m{0, 0};
   std::array<int, 2> followed{0, 0};
   std::set<int> bodies;
-  int most_tracks = 0;
+  int most_tracks = 0, reacquired = 0;
+  std::set<std::pair<int, int>> lost;  // (frame, body)
   for (size_t f = 0; f < s.frames.size(); ++f)
     for (const SessionAnswer& a : session.feed(s.frames[f], 0.1 * f)) {
+      for (const PersonAnswer& p : a.people) {
+        if (p.ended && p.estimate && p.estimate->lost) lost.insert({a.input, p.body});
+        if (p.started && p.message.find("found again where lost") != std::string::npos) {
+          EXPECT_TRUE(lost.count({a.input - 1, p.body})) << "frame " << a.input << ": body " << p.body << " " << p.message;
+          ++reacquired;
+        }
+      }
       int tracks = 0;
       // Each person's nearest track (followed when within 0.5 m).
       std::array<double, 2> nearest{0.5, 0.5};
@@ -277,9 +286,11 @@ TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
             << " mm), person 2 on " << followed[1] << " (" << 1000 * error_m[1] / std::max(1, followed[1]) << " mm)\n";
   EXPECT_EQ(most_tracks, 2);
   EXPECT_GE(bodies.size(), 2u);
+  EXPECT_GE(reacquired, 1);
   // Both are found at frame 5 (heading_frames); of the 21 frames from there each is within
-  // 0.5 m of a track on 20 and 16 (measured; the farther person's track is lost at frame 15 and
-  // found again at 20), 263 and 157 mm off on average.
+  // 0.5 m of a track on 20 and 20 (measured; the farther person's track is lost at frame 15 and
+  // starts again at 16; with reacquire_distance_m 0 it is found again at 20, on 16), 263 and
+  // 155 mm off on average.
   for (int person : {0, 1}) {
     EXPECT_GE(followed[person], 12) << "person " << person + 1;
     EXPECT_LT(error_m[person] / std::max(1, followed[person]), 0.3) << "person " << person + 1;
@@ -327,6 +338,7 @@ TEST(TrackingSession, RefusesBadOptionsNamingThem) {
   options.min_walk_m = std::nan("");
   options.max_people = 0;
   options.merge_distance_m = std::numeric_limits<double>::infinity();
+  options.reacquire_distance_m = -1;
   try {
     TrackingSession session(makeTracker(10), options);
     FAIL() << "accepted bad options";
@@ -336,6 +348,7 @@ TEST(TrackingSession, RefusesBadOptionsNamingThem) {
     EXPECT_NE(std::string(e.what()).find("min_start_speed_kmh and max_start_speed_kmh"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("max_people"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("merge_distance_m"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("reacquire_distance_m"), std::string::npos) << e.what();
   }
 }
 

@@ -10,8 +10,9 @@
 //     (vision/person_detector.h): a blob the size of a person, away from every track, seen
 //     again `heading_frames` later nearby, gives the position and the walking direction;
 //   * ends a track that is lost (TrackEstimate::lost: the person left, or is hidden) or that
-//     has merged with an older one (their waists nearer than `merge_distance_m`), and looks
-//     for people again;
+//     has merged with an older one (their waists nearer than `merge_distance_m`); a lost
+//     track starts again at the next frame from a person found near where it lost them
+//     (`reacquire_distance_m`), else people are looked for again;
 //   * keeps the MAP state sequence (paper §4: the ancestry of the best particle, final Δs
 //     frames later) per input frame and person.
 // Frames must come in order of stamp; reset() starts over (a bag that loops).
@@ -45,6 +46,10 @@ struct SessionOptions {
   // Two tracks whose waists come nearer than this on the ground follow one person: the newer
   // ends, m, [0, 5]. (People walking side by side keep about 0.6 m between their waists.)
   double merge_distance_m = 0.35;
+  // A lost track starts again at the next frame from the person found nearest to where it lost
+  // them, within this, m, [0, 5] (0: never; the person is looked for as anyone else,
+  // heading_frames on).
+  double reacquire_distance_m = 1.0;
   vision::PersonDetectorOptions detector;
 };
 
@@ -83,7 +88,9 @@ struct PersonAnswer {
   // The slot's track ended at this frame (lost, merged into an older track, replaced by a given
   // guess); a track started at the same frame is a new one.
   bool ended = false;
-  std::optional<TrackEstimate> estimate;  // this frame's filtered estimate (none when ended before it)
+  // This frame's filtered estimate: of the track that ran, else of the one started (none when
+  // a track ended before its step, as a replaced one).
+  std::optional<TrackEstimate> estimate;
   // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
   // of a track when it ends (a tracker that keeps the whole path: all of the track when it ends).
   std::vector<MapFrame> map_frames;
@@ -150,11 +157,14 @@ class TrackingSession {
     int started_input = -1;            // the input its track started at (the older track wins a merge)
     std::vector<std::pair<int, double>> track_inputs;  // per tracker frame: input index, stamp
     int map_written = -1;              // the last tracker frame given as a MapFrame
+    std::optional<InitialGuess> reacquire;  // its lost person, found again: the next frame starts there
     bool running() const { return tracker && tracker->started(); }
   };
   SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
-  // Guesses from the people seen now and heading_frames ago, away from the running tracks.
-  std::vector<InitialGuess> guessesFromSightings(const cv::Mat& bgr, int input);
+  // The people found in the frame away from the running tracks.
+  std::vector<vision::PersonCandidate> untrackedPeople(const cv::Mat& bgr) const;
+  // Guesses from the people seen now (untracked) and heading_frames ago.
+  std::vector<InitialGuess> guessesFromSightings(std::vector<vision::PersonCandidate> people, int input);
   // Starts slot's track at this frame; false (and the answer says why) when the guess cannot.
   bool startTrack(int slot, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
                   PersonAnswer& person, SessionAnswer& answer);
