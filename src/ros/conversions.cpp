@@ -175,10 +175,21 @@ std_msgs::ColorRGBA jointColour(core::body::BodyJoint joint) {
 
 }  // namespace
 
-BodyPose toBodyPose(const core::tracking::TrackEstimate& e, const std_msgs::Header& header, const std::string& body_id) {
+BodyPose toBodyPose(const core::tracking::TrackEstimate& e, const std_msgs::Header& header, const std::string& body_id,
+                    const cv::Rect2d& image_box_px, const cv::Size& image_size) {
   BodyPose message;
   message.header = header;
   message.body_id = body_id;
+  const cv::Rect box = cv::Rect(cv::Point(static_cast<int>(std::floor(image_box_px.x)), static_cast<int>(std::floor(image_box_px.y))),
+                                cv::Point(static_cast<int>(std::ceil(image_box_px.br().x)),
+                                          static_cast<int>(std::ceil(image_box_px.br().y)))) &
+                       cv::Rect(cv::Point(), image_size);
+  if (!image_box_px.empty() && box.area() > 0) {
+    message.image_box.x_offset = static_cast<uint32_t>(box.x);
+    message.image_box.y_offset = static_cast<uint32_t>(box.y);
+    message.image_box.width = static_cast<uint32_t>(box.width);
+    message.image_box.height = static_cast<uint32_t>(box.height);
+  }
   message.root.pose.position = toPoint(e.pose.joints[core::body::kWaist]);
   message.root.pose.orientation = yawQuaternion(e.heading_rad);
   message.root.covariance = rootCovariance(e);

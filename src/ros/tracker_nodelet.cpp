@@ -485,7 +485,8 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     const kw::tracking::TrackEstimate& estimate = *person.estimate;
     const kw::tracking::Tracker& tracker = session_->tracker(person.body);
     const std::string id = std::to_string(person.body);
-    poses->bodies.push_back(toBodyPose(estimate, header, id));
+    poses->bodies.push_back(toBodyPose(estimate, header, id, tracker.imageBox(estimate.pose),
+                                       cv::Size(tracker.camera().width(), tracker.camera().height())));
     body_pose_publisher_.publish(boost::make_shared<BodyPose>(poses->bodies.back()));
     pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
     walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));

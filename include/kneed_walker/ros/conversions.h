@@ -3,6 +3,7 @@
 #pragma once
 
 #include <geometry_msgs/TransformStamped.h>
+#include <opencv2/core.hpp>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
@@ -44,8 +45,10 @@ core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometr
 // `header`: the image's stamp and the world frame. REP 155 names: body_<id> at the mid-hip
 // (x along the walking direction, z up), joint frames <joint>_<id> beneath it.
 
+// `image_box_px`: the body's projected parts' bounding box (Tracker::imageBox), clipped to
+// the image of `image_size`.
 BodyPose toBodyPose(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
-                    const std::string& body_id);
+                    const std::string& body_id, const cv::Rect2d& image_box_px, const cv::Size& image_size);
 // The mid-hip and walking direction with the particles' spread (as amcl's ~amcl_pose).
 geometry_msgs::PoseWithCovarianceStamped toPose(const core::tracking::TrackEstimate& estimate,
                                                 const std_msgs::Header& header);

@@ -1,0 +1,167 @@
+// write_outputs: a node that writes what the tracker nodelet publishes into files, for a run
+// through track.launch (its out_dir argument; scripts/demo): every tracked person's joints
+// from ~body_poses as CSV `frame,stamp,joint,x,y,z,body` (track_offline's format), their image
+// boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an MJPG video.
+// `frame` is the index of the input image, by stamp, among the images seen on the input topic
+// (a bag's frame number when the bag starts at its video's first frame); poses whose image was
+// not seen are numbered from the images around them by the input's frame interval. The files
+// are written as the messages come (the overlay) or when the node stops (the CSVs, in order of
+// frame and body) when the node stops: at Ctrl-C, or --idle-timeout seconds (wall time) after the
+// last message once messages came (a bag has played; track.launch then ends).
+//
+//   rosrun kneed_walker write_outputs --out-dir DIR [--fps 7] [--tracker /kneed_walker]
+//       [--image /camera/image_raw] [--idle-timeout 0]
+#include <CLI/CLI.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <opencv2/videoio.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "kneed_walker/BodyPoseArray.h"
+#include "options.h"
+
+namespace {
+
+class OutputWriter {
+ public:
+  OutputWriter(const std::string& out_dir, double fps) : out_dir_(out_dir), fps_(fps) {}
+
+  void onImage(const sensor_msgs::ImageConstPtr& image) {
+    last_message_ = ros::WallTime::now();
+    image_stamps_.insert(image->header.stamp);
+  }
+  void onPoses(const kneed_walker::BodyPoseArrayConstPtr& poses) {
+    last_message_ = ros::WallTime::now();
+    poses_[poses->header.stamp] = *poses;
+  }
+  // Wall seconds since the last message; negative before the first.
+  double idleS() const { return last_message_.isZero() ? -1 : (ros::WallTime::now() - last_message_).toSec(); }
+  void onOverlay(const sensor_msgs::ImageConstPtr& image) {
+    last_message_ = ros::WallTime::now();
+    cv_bridge::CvImageConstPtr bgr;
+    try {
+      bgr = cv_bridge::toCvShare(image, "bgr8");
+    } catch (const cv_bridge::Exception& e) {
+      ROS_WARN_THROTTLE(5.0, "write_outputs: an overlay image cannot be converted (%s); skipped", e.what());
+      return;
+    }
+    if (!overlay_.isOpened()) {
+      overlay_.open(out_dir_ + "/overlay.avi", cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps_,
+                    bgr->image.size());
+      if (!overlay_.isOpened()) ROS_ERROR("write_outputs: cannot write %s/overlay.avi", out_dir_.c_str());
+    }
+    if (overlay_.isOpened() && bgr->image.size() == overlay_size_.value_or(bgr->image.size())) {
+      overlay_size_ = bgr->image.size();
+      overlay_.write(bgr->image);
+      ++overlay_frames_;
+    }
+  }
+
+  // The CSVs; returns false when one cannot be written.
+  bool finish() {
+    overlay_.release();
+    std::ofstream joints(out_dir_ + "/joints.csv"), boxes(out_dir_ + "/boxes.csv");
+    if (!joints || !boxes) return false;
+    joints << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+    boxes << "frame,x1,y1,x2,y2,body\n";
+    int bodies = 0;
+    for (const auto& [stamp, array] : poses_) {
+      const long frame = frameOf(stamp);
+      for (const kneed_walker::BodyPose& body : array.bodies) {
+        ++bodies;
+        for (size_t j = 0; j < body.joint_names.size() && j < body.joint_positions.size(); ++j) {
+          const geometry_msgs::Point& p = body.joint_positions[j];
+          joints << frame << ',' << stamp.toSec() << ',' << body.joint_names[j] << ',' << p.x << ',' << p.y << ','
+                 << p.z << ',' << body.body_id << '\n';
+        }
+        const sensor_msgs::RegionOfInterest& b = body.image_box;
+        if (b.width > 0 && b.height > 0)
+          boxes << frame << ',' << b.x_offset << ',' << b.y_offset << ',' << b.x_offset + b.width << ','
+                << b.y_offset + b.height << ',' << body.body_id << '\n';
+      }
+    }
+    // Printed, not logged: rosout is gone once the node has shut down.
+    std::printf("write_outputs: %zu frames with %d poses in %s/joints.csv and boxes.csv, %d overlay frames in overlay.avi\n",
+                poses_.size(), bodies, out_dir_.c_str(), overlay_frames_);
+    return static_cast<bool>(joints) && static_cast<bool>(boxes);
+  }
+
+ private:
+  long frameOf(const ros::Time& stamp) const {
+    if (image_stamps_.empty()) return std::lround(stamp.toSec() * fps_);
+    const auto at = image_stamps_.lower_bound(stamp);
+    if (at != image_stamps_.end() && *at == stamp) return std::distance(image_stamps_.begin(), at);
+    // Not seen: from the nearest image seen before it (or the first), by the frame interval.
+    const auto before = at == image_stamps_.begin() ? at : std::prev(at);
+    return std::distance(image_stamps_.begin(), before) + std::lround((stamp - *before).toSec() * fps_);
+  }
+
+  std::string out_dir_;
+  double fps_;
+  std::set<ros::Time> image_stamps_;
+  std::map<ros::Time, kneed_walker::BodyPoseArray> poses_;
+  cv::VideoWriter overlay_;
+  std::optional<cv::Size> overlay_size_;
+  int overlay_frames_ = 0;
+  ros::WallTime last_message_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "write_outputs");
+  const std::vector<std::string> args = [&] {
+    std::vector<std::string> kept;
+    ros::removeROSArgs(argc, argv, kept);
+    return kept;
+  }();
+  CLI::App app{"Writes the tracker nodelet's poses, image boxes and overlay into files as they are published."};
+  std::string out_dir, tracker = "/kneed_walker", image_topic = "/camera/image_raw";
+  double fps = 7.0, idle_timeout_s = 0;
+  app.add_option("--out-dir", out_dir, "directory for joints.csv, boxes.csv and overlay.avi (made if missing)")->required();
+  app.add_option("--fps", fps, "the input's frame rate (the overlay video's; numbers frames whose image was not seen)")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 1000));
+  app.add_option("--tracker", tracker, "the tracker nodelet's name")->capture_default_str();
+  app.add_option("--idle-timeout", idle_timeout_s,
+                 "stop this many wall seconds after the last message, once messages came (0: at Ctrl-C only)")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0, 1e6));
+  app.add_option("--image", image_topic, "the tracker's input image topic")->capture_default_str();
+  std::vector<const char*> plain;
+  for (const std::string& a : args) plain.push_back(a.c_str());
+  try {
+    app.parse(static_cast<int>(plain.size()), plain.data());
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  mkdir(out_dir.c_str(), 0755);
+  struct stat info;
+  if (stat(out_dir.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || !std::ofstream(out_dir + "/joints.csv")) {
+    std::fprintf(stderr, "write_outputs: --out-dir %s: cannot write there\n", out_dir.c_str());
+    return 1;
+  }
+  ros::NodeHandle nh;
+  OutputWriter writer(out_dir, fps);
+  ros::Subscriber images = nh.subscribe(image_topic, 100, &OutputWriter::onImage, &writer);
+  ros::Subscriber poses = nh.subscribe(tracker + "/body_poses", 100, &OutputWriter::onPoses, &writer);
+  ros::Subscriber overlay = nh.subscribe(tracker + "/overlay", 100, &OutputWriter::onOverlay, &writer);
+  const ros::WallTimer idle = nh.createWallTimer(ros::WallDuration(0.5), [&](const ros::WallTimerEvent&) {
+    if (idle_timeout_s > 0 && writer.idleS() > idle_timeout_s) ros::shutdown();
+  });
+  ros::spin();  // until Ctrl-C, roslaunch stops it, or the input has ended
+  if (!writer.finish()) {
+    std::fprintf(stderr, "write_outputs: --out-dir %s: cannot write the CSVs\n", out_dir.c_str());
+    return 1;
+  }
+  return 0;
+}
