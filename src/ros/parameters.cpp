@@ -167,6 +167,9 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("max_people", session.max_people);
   reader.read("merge_distance_m", session.merge_distance_m);
   reader.read("reacquire_distance_m", session.reacquire_distance_m);
+  reader.read("estimate_person_height", session.estimate_person_height);
+  reader.read("min_person_height_m", session.min_person_height_m);
+  reader.read("max_person_height_m", session.max_person_height_m);
   for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
   if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
     reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +

@@ -253,6 +253,10 @@ int main(int argc, char** argv) {
   app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
       ->capture_default_str()->check(FiniteRange(0.0, 3.0));
   app.add_option("--particles", options.num_particles, "particles (per person)")->capture_default_str()->check(CLI::Range(1, 1000000));
+  bool estimate_height = false;
+  app.add_flag("--estimate-height", estimate_height,
+               "track each person found in the image with the height of their blob on the ground (1.5-1.95 m) "
+               "instead of --height");
   app.add_option("--max-people", max_people,
                  "people tracked at once, each found walking by itself (as the nodelet's max_people): bodies 1..N")
       ->capture_default_str()->check(CLI::Range(1, 16));
@@ -386,6 +390,7 @@ int main(int argc, char** argv) {
     session_options.min_start_speed_kmh = guess.min_speed_kmh;
     session_options.max_start_speed_kmh = guess.max_speed_kmh;
     session_options.max_people = max_people;
+    session_options.estimate_person_height = estimate_height;
     kw::tracking::TrackingSession session(
         kw::tracking::trackerFactory(*camera, ground, table, kw::prior::loadPriorOptions(prior_path), options, likelihood),
         session_options);

@@ -35,6 +35,9 @@ std::vector<std::string> validate(const SessionOptions& o) {
     problems.push_back("max_people = " + std::to_string(o.max_people) + " is outside [1, 16]");
   if (!(std::isfinite(o.merge_distance_m) && o.merge_distance_m >= 0 && o.merge_distance_m <= 5))
     problems.push_back("merge_distance_m = " + std::to_string(o.merge_distance_m) + " is outside [0, 5]");
+  if (!(std::isfinite(o.min_person_height_m) && std::isfinite(o.max_person_height_m) && 1 <= o.min_person_height_m &&
+        o.min_person_height_m <= o.max_person_height_m && o.max_person_height_m <= 2.3))
+    problems.push_back("min_person_height_m and max_person_height_m must be finite with 1 <= min <= max <= 2.3");
   if (!(std::isfinite(o.reacquire_distance_m) && o.reacquire_distance_m >= 0 && o.reacquire_distance_m <= 5))
     problems.push_back("reacquire_distance_m = " + std::to_string(o.reacquire_distance_m) + " is outside [0, 5]");
   return problems;
@@ -43,8 +46,9 @@ std::vector<std::string> validate(const SessionOptions& o) {
 TrackerFactory trackerFactory(const vision::Camera& camera, const vision::GroundPlane& ground,
                               const gait::GaitTable& prior_table, const prior::PriorOptions& prior,
                               const TrackerOptions& options, const vision::LikelihoodOptions& likelihood) {
-  return [=](int body) {
+  return [=](int body, std::optional<double> person_height_m) {
     TrackerOptions own = options;
+    if (person_height_m) own.person_height_m = *person_height_m;
     if (body > 1) own.seed = mixSeed(options.seed, 0, 1000 + static_cast<std::uint64_t>(body), 0);
     return std::make_unique<Tracker>(camera, ground, prior_table, prior, own, likelihood);
   };
@@ -75,8 +79,9 @@ TrackingSession::TrackingSession(TrackerFactory make_tracker, const SessionOptio
   if (!make_tracker_) throw std::invalid_argument("TrackingSession needs a tracker factory");
   common::throwIfInvalid("session options", validate(options));
   slots_.resize(options.max_people);
-  slots_[0].tracker = make_tracker_(1);
+  slots_[0].tracker = make_tracker_(1, std::nullopt);
   if (!slots_[0].tracker) throw std::invalid_argument("the tracker factory made no tracker");
+  default_height_m_ = slots_[0].tracker->personHeightM();
 }
 
 const Tracker& TrackingSession::tracker(int body) const {
@@ -87,9 +92,10 @@ const Tracker& TrackingSession::tracker(int body) const {
   return slot.tracker ? *slot.tracker : *slots_[0].tracker;
 }
 
-Tracker& TrackingSession::slotTracker(int slot) {
-  if (!slots_[slot].tracker) {
-    slots_[slot].tracker = make_tracker_(slot + 1);
+Tracker& TrackingSession::slotTracker(int slot, std::optional<double> person_height_m) {
+  const double wanted = person_height_m.value_or(default_height_m_);
+  if (!slots_[slot].tracker || std::abs(slots_[slot].tracker->personHeightM() - wanted) > 1e-9) {
+    slots_[slot].tracker = make_tracker_(slot + 1, person_height_m);
     if (!background_.empty()) slots_[slot].tracker->setBackground(background_);
   }
   return *slots_[slot].tracker;
@@ -149,7 +155,7 @@ bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int 
   Slot& slot = slots_[s];
   TrackEstimate estimate;
   try {
-    estimate = slotTracker(s).start(bgr, stamp_s, guess);
+    estimate = slotTracker(s, guess.person_height_m).start(bgr, stamp_s, guess);
   } catch (const std::invalid_argument& e) {
     // The guess does not fit the image (e.g. a box around no person): the frame is
     // answered as waiting and the person is looked for in the image instead.
@@ -264,6 +270,8 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
         guess.position_m = nearest->ground_xy_m;
         guess.heading_rad = lost.heading_rad;
         guess.heading_sd_rad = 0.6;
+        if (options_.estimate_person_height)
+          guess.person_height_m = std::clamp(nearest->height_m, options_.min_person_height_m, options_.max_person_height_m);
         guess.min_speed_kmh = options_.min_start_speed_kmh;
         guess.max_speed_kmh = options_.max_start_speed_kmh;
         slots_[s].reacquire = guess;
@@ -379,6 +387,9 @@ std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<visi
     guess.position_m = current->person.ground_xy_m;
     guess.heading_rad = std::atan2(walked.y(), walked.x());
     guess.heading_sd_rad = 0.5;
+    if (options_.estimate_person_height)
+      guess.person_height_m = std::clamp(0.5 * (current->person.height_m + before->person.height_m),
+                                         options_.min_person_height_m, options_.max_person_height_m);
     guess.min_speed_kmh = options_.min_start_speed_kmh;
     guess.max_speed_kmh = options_.max_start_speed_kmh;
     guesses.push_back(guess);

@@ -39,6 +39,9 @@ struct InitialGuess {
   // is nearer the camera), and a track started on the wrong leg stays mirrored: measured on the
   // synthetic sequences, 150–250 mm mean joint error against 60–110 mm started on the right leg.
   std::optional<dynamics::Leg> stance_leg;
+  // The person's standing height, m, when known (e.g. from their box on the ground): a session
+  // makes the track's tracker for it (TrackingSession); unset, the tracker's person_height_m.
+  std::optional<double> person_height_m;
 };
 
 // A guess from a person's box in the image: the feet at the middle of the box's bottom edge on
@@ -121,6 +124,7 @@ class Tracker {
   // With TrackerOptions::keep_whole_path: the MAP state sequence from the track's first frame.
   std::vector<body::BodyPose> wholeMapPoses(std::vector<int>* frames) const;
   bool keepsWholePath() const { return options_.keep_whole_path; }
+  double personHeightM() const { return options_.person_height_m; }
   const TrackerTiming& timing() const { return timing_; }
   int gaitCount() const { return static_cast<int>(bank_.size()); }
   // The pose of a particle (world, metres).

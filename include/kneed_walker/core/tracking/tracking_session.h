@@ -50,12 +50,18 @@ struct SessionOptions {
   // them, within this, m, [0, 5] (0: never; the person is looked for as anyone else,
   // heading_frames on).
   double reacquire_distance_m = 1.0;
+  // A person found in the image is tracked with the height of their blob on the ground (the
+  // mean of the two sightings), clamped to [min_person_height_m, max_person_height_m]; false:
+  // everyone is the tracker's person_height_m.
+  bool estimate_person_height = false;
+  double min_person_height_m = 1.5, max_person_height_m = 1.95;  // [1, 2.3]
   vision::PersonDetectorOptions detector;
 };
 
 // Makes the tracker of a body slot (1..max_people). The trackers of a session differ only in
 // their seed: see trackerFactory.
-using TrackerFactory = std::function<std::unique_ptr<Tracker>(int body)>;
+// `person_height_m`: the person's, when known (else the options').
+using TrackerFactory = std::function<std::unique_ptr<Tracker>(int body, std::optional<double> person_height_m)>;
 // Trackers with these arguments (tracker.h), body 1's seeded with options.seed (a lone person
 // is tracked exactly as by one Tracker), body b's with a seed mixed from it and b.
 TrackerFactory trackerFactory(const vision::Camera& camera, const vision::GroundPlane& ground,
@@ -170,9 +176,11 @@ class TrackingSession {
                   PersonAnswer& person, SessionAnswer& answer);
   std::vector<MapFrame> endTrack(Slot& slot);
   void collectMapFrames(Slot& slot, PersonAnswer& person);
-  Tracker& slotTracker(int slot);
+  // The slot's tracker, made again when the person's height differs from its own.
+  Tracker& slotTracker(int slot, std::optional<double> person_height_m = std::nullopt);
 
   TrackerFactory make_tracker_;
+  double default_height_m_ = 0;  // the factory's trackers' person height when none is given
   SessionOptions options_;
   std::vector<Slot> slots_;  // max_people; slot s is body s + 1
   vision::BackgroundModel background_;
