@@ -458,9 +458,10 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
   std_msgs::Header header;
   header.stamp = image->header.stamp;
   header.frame_id = config_.ros.world_frame;
-  const kw::tracking::TrackEstimate* first = nullptr;  // the lowest-numbered body's, for ~status
+  // For ~status: the lowest-numbered body still tracked, else the lowest-numbered lost one.
+  const kw::tracking::TrackEstimate* first = nullptr;
   for (const kw::tracking::PersonAnswer& person : answer.people)
-    if (person.estimate && !first) first = &*person.estimate;
+    if (person.estimate && (!first || (first->lost && !person.estimate->lost))) first = &*person.estimate;
   {
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++frames_answered_;
