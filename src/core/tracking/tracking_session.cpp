@@ -186,9 +186,12 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
   for (int s = 0; s < slots; ++s) people[s].body = s + 1;
   auto waist = [&](int s) { return people[s].estimate->pose.joints[body::kWaist].head<2>().eval(); };
 
-  // A given guess goes to a free slot, else replaces the running track nearest to it.
+  // A given guess goes to a free slot (one not about to start again where its person was lost,
+  // if there is such), else replaces the running track nearest to it.
   int given = -1;
   if (pending_guess_) {
+    for (int s = 0; s < slots && given < 0; ++s)
+      if (!slots_[s].running() && !slots_[s].reacquire) given = s;
     for (int s = 0; s < slots && given < 0; ++s)
       if (!slots_[s].running()) given = s;
     if (given < 0) {
@@ -226,8 +229,16 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
       people[b].ended = true;
       people[b].message = "merged with body " + std::to_string(a + 1) + ": both followed one person; ended";
     }
-  // New tracks: from the given guess; else those lost at the last frame and found again there,
-  // and the people found walking (in the slots free since before this frame).
+  // New tracks: the people lost at the last frame and found again there (but in the slot a given
+  // guess takes); the given guess; else the people found walking (in the slots free since
+  // before this frame).
+  for (int s = 0; s < slots; ++s) {
+    if (!slots_[s].reacquire || s == given) continue;
+    const InitialGuess guess = *slots_[s].reacquire;
+    slots_[s].reacquire.reset();
+    if (startTrack(s, bgr, stamp_s, input, guess, people[s], answer))
+      people[s].message = "found again where lost: " + people[s].message;
+  }
   if (pending_guess_) {
     const InitialGuess guess = *pending_guess_;
     pending_guess_.reset();
@@ -240,13 +251,6 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     slots_[given].reacquire.reset();
     startTrack(given, bgr, stamp_s, input, guess, people[given], answer);
   } else if (options_.find_people) {
-    for (int s = 0; s < slots; ++s) {
-      if (!slots_[s].reacquire) continue;
-      const InitialGuess guess = *slots_[s].reacquire;
-      slots_[s].reacquire.reset();
-      if (startTrack(s, bgr, stamp_s, input, guess, people[s], answer))
-        people[s].message = "found again where lost: " + people[s].message;
-    }
     std::vector<int> free, lost_now;
     for (int s = 0; s < slots; ++s) {
       if (!slots_[s].running() && !people[s].ended) free.push_back(s);
@@ -266,15 +270,7 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
           if (d < best) best = d, nearest = it;
         }
         if (nearest == found.end()) continue;
-        InitialGuess guess;
-        guess.position_m = nearest->ground_xy_m;
-        guess.heading_rad = lost.heading_rad;
-        guess.heading_sd_rad = 0.6;
-        if (options_.estimate_person_height)
-          guess.person_height_m = std::clamp(nearest->height_m, options_.min_person_height_m, options_.max_person_height_m);
-        guess.min_speed_kmh = options_.min_start_speed_kmh;
-        guess.max_speed_kmh = options_.max_start_speed_kmh;
-        slots_[s].reacquire = guess;
+        slots_[s].reacquire = foundPersonGuess(nearest->ground_xy_m, lost.heading_rad, 0.6, nearest->height_m);
         found.erase(nearest);
         char text[96];
         std::snprintf(text, sizeof text, "; someone is %.2f m away: starting again there at the next frame", best);
@@ -338,6 +334,19 @@ std::vector<MapFrame> TrackingSession::endTrack(Slot& slot) {
   return rest;
 }
 
+InitialGuess TrackingSession::foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad,
+                                              double heading_sd_rad, double blob_height_m) const {
+  InitialGuess guess;
+  guess.position_m = position_m;
+  guess.heading_rad = heading_rad;
+  guess.heading_sd_rad = heading_sd_rad;
+  if (options_.estimate_person_height)
+    guess.person_height_m = std::clamp(blob_height_m, options_.min_person_height_m, options_.max_person_height_m);
+  guess.min_speed_kmh = options_.min_start_speed_kmh;
+  guess.max_speed_kmh = options_.max_start_speed_kmh;
+  return guess;
+}
+
 std::vector<vision::PersonCandidate> TrackingSession::untrackedPeople(const cv::Mat& bgr) const {
   const Tracker& any = tracker();
   std::vector<vision::PersonCandidate> untracked;
@@ -383,16 +392,8 @@ std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<visi
     if (!before) continue;
     const Eigen::Vector2d walked = current->person.ground_xy_m - before->person.ground_xy_m;
     if (walked.norm() < options_.min_walk_m) continue;
-    InitialGuess guess;
-    guess.position_m = current->person.ground_xy_m;
-    guess.heading_rad = std::atan2(walked.y(), walked.x());
-    guess.heading_sd_rad = 0.5;
-    if (options_.estimate_person_height)
-      guess.person_height_m = std::clamp(0.5 * (current->person.height_m + before->person.height_m),
-                                         options_.min_person_height_m, options_.max_person_height_m);
-    guess.min_speed_kmh = options_.min_start_speed_kmh;
-    guess.max_speed_kmh = options_.max_start_speed_kmh;
-    guesses.push_back(guess);
+    guesses.push_back(foundPersonGuess(current->person.ground_xy_m, std::atan2(walked.y(), walked.x()), 0.5,
+                                       0.5 * (current->person.height_m + before->person.height_m)));
   }
   return guesses;
 }

@@ -167,6 +167,10 @@ class TrackingSession {
     bool running() const { return tracker && tracker->started(); }
   };
   SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
+  // A guess for a person found in the image (the options' start speeds; their blob's height
+  // when estimate_person_height).
+  InitialGuess foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad, double heading_sd_rad,
+                                double blob_height_m) const;
   // The people found in the frame away from the running tracks.
   std::vector<vision::PersonCandidate> untrackedPeople(const cv::Mat& bgr) const;
   // Guesses from the people seen now (untracked) and heading_frames ago.
