@@ -146,6 +146,16 @@ WalkerModel scaleToPerson(const BodyProportions& p, double height_m, double mass
 BodyProportions mcGeerProportions() {
   BodyProportions p;
   p.torso.com_along = 0.0;  // the torso becomes McGeer's hip point mass
+  // McGeer turns the shank's whole frame by e, its centre of mass as well as the foot centre,
+  // and puts the centre of mass c = 0.24 along the turned axis u and w = 0.01 behind it
+  // (../shared/reference/walker-model.md, "The shank's frame"). With d(φ + e) = cos e d(φ) +
+  // sin e n(φ) and n(φ + e) = cos e n(φ) − sin e d(φ), c u − w n(u) is, on the untilted
+  // axis of this model's convention, (c cos e + w sin e) along and (c sin e − w cos e) ahead:
+  // 0.2372 and 0.0379. Only with this frame is his cycle stable (Table 1).
+  constexpr double kAlongTurnedAxis = 0.24, kBehindTurnedAxis = 0.01;
+  const double e = p.foot_offset_angle;
+  p.shank.com_along = kAlongTurnedAxis * std::cos(e) + kBehindTurnedAxis * std::sin(e);
+  p.shank.com_forward = kAlongTurnedAxis * std::sin(e) - kBehindTurnedAxis * std::cos(e);
   return p;
 }
 

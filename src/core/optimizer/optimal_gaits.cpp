@@ -281,6 +281,28 @@ OptimalGait initialGaitGuess() {
 
 namespace {
 
+double mix(double from, double to, double a) { return (1 - a) * from + a * to; }  // exact at 0 and 1
+
+dynamics::Segment blend(const dynamics::Segment& from, const dynamics::Segment& to, double a) {
+  return {mix(from.mass, to.mass, a), mix(from.length, to.length, a),
+          mix(from.com_along, to.com_along, a), mix(from.com_forward, to.com_forward, a),
+          mix(from.radius_of_gyration, to.radius_of_gyration, a)};
+}
+
+// The proportions a of the way from one set to another (a ∈ [0, 1]); the masses still add
+// up to 1.
+dynamics::BodyProportions blend(const dynamics::BodyProportions& from, const dynamics::BodyProportions& to,
+                                double a) {
+  dynamics::BodyProportions p;
+  p.leg_length_per_height = mix(from.leg_length_per_height, to.leg_length_per_height, a);
+  p.torso = blend(from.torso, to.torso, a);
+  p.thigh = blend(from.thigh, to.thigh, a);
+  p.shank = blend(from.shank, to.shank, a);
+  p.foot_radius = mix(from.foot_radius, to.foot_radius, a);
+  p.foot_offset_angle = mix(from.foot_offset_angle, to.foot_offset_angle, a);
+  return p;
+}
+
 OptimalGait continueFromPassiveGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
                                     const GaitOptimizerOptions& options, int target_steps) {
   // Adaptive continuation on a homotopy parameter a ∈ [0, 1]: a failed step is retried at half
@@ -302,10 +324,11 @@ OptimalGait continueFromPassiveGait(const dynamics::BodyProportions& proportions
     return gait;
   };
   OptimalGait gait = initialGaitGuess();
+  const dynamics::BodyProportions mcgeer = dynamics::mcGeerProportions();
   gait = follow(gait, [&](double a, const OptimalGait& from) {
-    dynamics::BodyProportions raised = proportions;
-    raised.torso.com_along *= a;  // from McGeer's hip mass up to the torso's place
-    return optimizeGait(raised, from.target, from, options);
+    // From McGeer's walker (hip mass, his shank) to the person's proportions (the torso
+    // raised to its place, the shank's centre of mass moved).
+    return optimizeGait(blend(mcgeer, proportions, a), from.target, from, options);
   });
   if (!gait.feasible()) return gait;
   const gait::GaitTarget start = gait.target;

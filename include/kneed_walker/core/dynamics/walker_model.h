@@ -50,6 +50,10 @@ struct BodyProportions {
   // Segments: mass / body mass; lengths / L.
   Segment torso{0.676, 0.55, 0.34, 0.0, 0.27};
   Segment thigh{0.100, 0.46, 0.20, 0.00, 0.135};
+  // The shank's centre of mass 0.24 along the untilted axis and 0.01 ahead: McGeer's figures
+  // read in the untilted frame, the geometry the shipped gait tables were optimised for.
+  // McGeer's own frame is turned by e (mcGeerProportions); moving the person to it means
+  // regenerating both gait tables (issue 13).
   Segment shank{0.062, 0.54, 0.24, 0.01, 0.186};
   double foot_radius = 0.2;        // R / L
   double foot_offset_angle = 0.2;  // e, rad
@@ -79,7 +83,9 @@ WalkerModel scaleToPerson(const BodyProportions& proportions, double height_m, d
 
 // McGeer's passive kneed walker's proportions: the defaults with the torso reduced to his
 // hip mass (centre of mass at the hip, com_along = 0), so that it no longer couples to the
-// legs. Scaled to a person, it walks passively down a 0.0456 rad slope.
+// legs, and his shank's centre of mass (0.24 along the shank frame turned by e, 0.01 behind
+// it: 0.2372 along and 0.0379 ahead of the untilted axis). It walks passively down a
+// 0.0456 rad slope in the stable cycle of his Table 1.
 BodyProportions mcGeerProportions();
 
 // A walker with these proportions in dimensionless units (leg length 1, body mass 1, g = 1),
