@@ -28,7 +28,7 @@ inline void velocityCoefficients(const KinematicMap& map, const PointMap& p,
 // kMaxRows constraint rows, by the Schur complement; no heap allocation.
 template <int N>
 struct ConstrainedSolve {
-  static constexpr int kMaxRows = 4;
+  static constexpr int kMaxRows = 5;  // the landing sole's two rows, a held sole's, two knees
   using VecN = Eigen::Matrix<double, N, 1>;
   using MatN = Eigen::Matrix<double, N, N>;
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, N, 0, kMaxRows, N>;
@@ -366,29 +366,52 @@ HeelStrike heelStrike(const KinematicMap& map, const Vector5& q, const Vector5& 
     contact(1, 2 + j) = vj.imag();
   }
   contact(0, 2 + kSwingShank) += map.foot_radius;
+  // The old stance sole's normal velocity v_Cy: held at 0 when the impact would drive the sole
+  // into the ground. The hold is frictionless (the normal row alone), so that with the knees
+  // the active set is a linear complementarity problem with a positive definite matrix, which
+  // always has one solution; with no slip at both soles some impacts have none.
+  Solve::Rows trailing(1, kN);
+  trailing.setZero();
+  trailing(0, 1) = 1.0;
 
+  // The active set by enumeration: the trailing sole free (it must then rise) or held (the
+  // ground must then push it), each with the knee subsets (a held knee's impulse ≥ 0, a free
+  // one must not hyperextend).
   const Eigen::LLT<Solve::MatN> llt(m);
   HeelStrike result{};
   VecN z_after = z_dot;
-  forEachKneeSubset(knees_on_limit, [&](const KneeFlags& subset) {
-    const Solve::Rows knee_rows = kneeRows<kN>(subset, 2);
-    Solve::Rows g(contact.rows() + knee_rows.rows(), kN);
-    g << contact, knee_rows;
-    VecN z;
-    Solve::VecR lambda;
-    Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), z, lambda);
-    int row = 2;
-    for (int k = 0; k < kNumKnees; ++k) {
-      const double flexion_rate = kneeFlexionRow(k).dot(z.tail<kNumCoordinates>());
-      if (subset[k] && lambda[row++] < -kComplementarityTolerance) return false;
-      if (!subset[k] && knees_on_limit[k] && flexion_rate < -kComplementarityTolerance)
+  for (const bool hold : {false, true}) {
+    const int sole_rows = hold ? 3 : 2;
+    const bool found = forEachKneeSubset(knees_on_limit, [&](const KneeFlags& subset) {
+      const Solve::Rows knee_rows = kneeRows<kN>(subset, 2);
+      Solve::Rows g(sole_rows + knee_rows.rows(), kN);
+      if (hold)
+        g << contact, trailing, knee_rows;
+      else
+        g << contact, knee_rows;
+      VecN z;
+      Solve::VecR lambda;
+      Solve::solve(llt, momentum, g, Solve::VecR::Zero(g.rows()), z, lambda);
+      if (hold ? lambda[2] < -kComplementarityTolerance : z[1] < -kComplementarityTolerance)
         return false;
-    }
-    z_after = z;
-    result.knees_held = subset;
-    result.ground_normal_impulse = lambda[1];
-    return true;
-  });
+      int row = sole_rows;
+      for (int k = 0; k < kNumKnees; ++k) {
+        const double flexion_rate = kneeFlexionRow(k).dot(z.tail<kNumCoordinates>());
+        if (subset[k] && lambda[row++] < -kComplementarityTolerance) return false;
+        if (!subset[k] && knees_on_limit[k] && flexion_rate < -kComplementarityTolerance)
+          return false;
+      }
+      z_after = z;
+      result.knees_held = subset;
+      result.ground_normal_impulse = lambda[1];
+      result.trailing_sole_held = hold;
+      result.trailing_sole_impulse = hold ? lambda[2] : 0.0;
+      result.trailing_sole_rate = z[1];  // v_Cy: the released sole moves with its centre along y
+      result.solved = true;
+      return true;
+    });
+    if (found) break;
+  }
   result.qdot_after = z_after.tail<kNumCoordinates>();
   return result;
 }

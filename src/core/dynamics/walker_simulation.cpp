@@ -124,9 +124,10 @@ void WalkerSimulator::applyKneeLimit(WalkerState& state, int knee) const {
 }
 
 WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
-                            double toe_off_impulse) {
+                            double toe_off_impulse, HeelStrike* impact_out) {
   const HeelStrike impact =
       heelStrike(map, before.q, before.qdot, toe_off_impulse, before.knee_on_limit);
+  if (impact_out) *impact_out = impact;
   const Point new_foot = position(map, map.swing_foot_centre, before.q, before.stance_foot_x);
   // Swap stance and swing labels (the torso keeps its index).
   auto swap = [](const Vector5& v) {
@@ -281,8 +282,10 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
       rk4(controls, state, h_event, state, integrals);
       report.elapsed += h_event;
       if (first == Event::kHeelStrike) {
-        state = afterHeelStrike(map_, state, controls.toe_off_impulse);
+        HeelStrike impact;
+        state = afterHeelStrike(map_, state, controls.toe_off_impulse, &impact);
         ++report.heel_strikes;
+        report.pulling_heel_strikes += !impact.physical();
       } else {
         applyKneeLimit(state, first == Event::kStanceKnee ? 0 : 1);
         ++report.knee_limit_events;
@@ -314,6 +317,7 @@ StrideResult WalkerSimulator::stride(const WalkerControls& controls,
   const double limit = options_.max_stride_duration * natural_time_;
   const AdvanceReport report = run(controls, result.end, limit * 1.01, true, &result.integrals);
   result.completed = report.heel_strikes > 0 && !report.fell;
+  result.pulling_heel_strike = report.pulling_heel_strikes > 0;
   result.duration = report.elapsed;
   result.step_length = pointPosition(map_.hip, result.end).real() - hip_start;
   result.speed = result.duration > 0 ? result.step_length / result.duration : 0;

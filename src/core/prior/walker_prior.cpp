@@ -168,6 +168,7 @@ WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides
     for (int in_chain = 0; in_chain < strides_per_chain && count.walked + count.fell < strides;) {
       const dynamics::AdvanceReport report = prior.transition(particle, dt, random);
       count.walked += report.heel_strikes;
+      count.pulling += report.pulling_heel_strikes;
       in_chain += report.heel_strikes;
       if (report.fell) {
         ++count.fell;

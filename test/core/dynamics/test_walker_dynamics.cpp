@@ -153,24 +153,51 @@ WalkerState stateAtTouchDown(const KinematicMap& map, RandomStates& random, int 
   return s;
 }
 
+// The soles' contact points just before a strike: the landing (new) and the trailing (old) one.
+struct Soles {
+  Point landing, trailing;
+};
+Soles solesAt(const KinematicMap& map, const WalkerState& s) {
+  return {position(map, map.swing_foot_centre, s.q, s.stance_foot_x) - Point(0, map.foot_radius),
+          stanceFootCentre(map, s.q, s.stance_foot_x) - Point(0, map.foot_radius)};
+}
+
+// z-moment about `about` of an impulse applied at `at`, counter-clockwise.
+double momentAbout(Point about, Point at, Point impulse) {
+  const Point arm = at - about;
+  return arm.real() * impulse.imag() - arm.imag() * impulse.real();
+}
+
+// The same for a held trailing sole's normal impulse.
+double holdMoment(const Soles& soles, const HeelStrike& impact) {
+  return momentAbout(soles.landing, soles.trailing, Point(0, impact.trailing_sole_impulse));
+}
+
+// Through a heel strike only the ground's impulses act. At the new contact they have no
+// moment, so the angular momentum about it is conserved, but for the moment of the impulse
+// on a trailing sole that the impact holds on the ground.
 TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
   const KinematicMap map = kneedWalkerMap(kPerson);
   RandomStates random(3);
   double worst = 0;
+  int held = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const WalkerState before = stateAtTouchDown(map, random, trial, 0.2);
-    const Point contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
-                          Point(0, map.foot_radius);
+    const Soles soles = solesAt(map, before);
     const double h_before =
-        angularMomentum(map, before.q, before.qdot, before.stance_foot_x, contact);
+        angularMomentum(map, before.q, before.qdot, before.stance_foot_x, soles.landing);
+    const HeelStrike impact = heelStrike(map, before.q, before.qdot, 0.0, before.knee_on_limit);
+    ASSERT_TRUE(impact.solved) << "trial " << trial;
+    held += impact.trailing_sole_held;
+    const double h_expected = h_before + holdMoment(soles, impact);
     const WalkerState after = afterHeelStrike(map, before, 0.0);
-    const double h_after = angularMomentum(map, after.q, after.qdot, after.stance_foot_x, contact);
-    worst = std::max(worst, std::abs(h_after - h_before) / std::abs(h_before));
-    // Measured 9e-15 worst: the impact is one linear solve, exact to rounding.
-    EXPECT_NEAR(h_after, h_before, 1e-12 * std::abs(h_before)) << "trial " << trial;
+    const double h_after = angularMomentum(map, after.q, after.qdot, after.stance_foot_x, soles.landing);
+    worst = std::max(worst, std::abs(h_after - h_expected) / std::abs(h_before));
+    // Measured 1.4e-14 worst: the impact is one linear solve, exact to rounding.
+    EXPECT_NEAR(h_after, h_expected, 1e-12 * std::abs(h_before)) << "trial " << trial;
     // The new stance foot is where the swing foot was, and the legs swapped.
     EXPECT_NEAR(std::abs(stanceFootCentre(map, after.q, after.stance_foot_x) -
-                         (contact + Point(0, map.foot_radius))),
+                         (soles.landing + Point(0, map.foot_radius))),
                 0.0, 1e-12);
     EXPECT_EQ(after.q[kStanceThigh], before.q[kSwingThigh]);
     EXPECT_NE(after.stance_leg, before.stance_leg);
@@ -179,12 +206,51 @@ TEST(WalkerDynamics, HeelStrikeConservesAngularMomentumAboutTheNewContact) {
               mechanicalEnergy(map, kPerson.gravity, 0, before.q, before.qdot,
                                before.stance_foot_x) + 1e-9);
   }
-  std::cout << "angular momentum about the new contact: worst relative change " << worst << "\n";
+  std::cout << "angular momentum about the new contact: worst relative change " << worst
+            << "; trailing sole held in " << held << " of 40 strikes\n";
+  EXPECT_GT(held, 0) << "the random strikes must exercise the held trailing sole";
+  EXPECT_LT(held, 40) << "... and the free one";
+}
+
+// After a heel strike the ground has only pushed on a held trailing sole, which leaves with no
+// normal velocity; a free trailing sole rises; no knee on its limit moves into
+// hyperextension; and a landing that needs the ground to pull is reported as not physical.
+TEST(WalkerDynamics, HeelStrikeOnlyPushesLiftsTheTrailingSoleAndKeepsKneesOnTheirStops) {
+  const KinematicMap map = kneedWalkerMap(kPerson);
+  RandomStates random(5);
+  int held = 0, pulling = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const WalkerState before = stateAtTouchDown(map, random, trial, 0.0);
+    const HeelStrike impact = heelStrike(map, before.q, before.qdot, 0.0, before.knee_on_limit);
+    ASSERT_TRUE(impact.solved) << "trial " << trial;
+    // The trailing sole after the impact, seen from the new stance foot (it is now the swing
+    // foot): along the ground's normal its sole point moves with its centre.
+    const WalkerState after = afterHeelStrike(map, before, 0.0);
+    const double sole_rate = velocity(map, map.swing_foot_centre, after.q, after.qdot).imag();
+    EXPECT_NEAR(sole_rate, impact.trailing_sole_rate, 1e-12) << "trial " << trial;
+    if (impact.trailing_sole_held) {
+      ++held;
+      EXPECT_GE(impact.trailing_sole_impulse, -1e-12) << "trial " << trial;
+      EXPECT_NEAR(sole_rate, 0.0, 1e-12) << "trial " << trial << ": a held sole leaves the ground at rest along its normal";
+    } else {
+      EXPECT_GE(sole_rate, -1e-12) << "trial " << trial << ": the sole sinks";
+    }
+    for (int k = 0; k < kNumKnees; ++k)
+      if (before.knee_on_limit[k])
+        EXPECT_GE(kneeFlexionRow(k).dot(impact.qdot_after), -1e-12) << "trial " << trial << ", knee " << k;
+    pulling += impact.ground_normal_impulse < 0;
+    EXPECT_EQ(impact.physical(), impact.ground_normal_impulse >= -1e-12) << "trial " << trial;
+  }
+  std::cout << "of 200 random strikes: trailing sole held in " << held << ", pulling ground in "
+            << pulling << "\n";
+  EXPECT_GT(held, 0);
+  EXPECT_GT(pulling, 0) << "the random strikes must exercise a pulling landing";
 }
 
 // With a toe-off impulse ι (eq. 5), the angular momentum about the new contact changes by
 // exactly the moment of ι applied at the old contact, along the trailing leg towards the hip:
-// the ground's impulse at the new contact and the knees' limit impulses have no moment there.
+// the ground's impulse at the new contact and the knees' limit impulses have no moment there
+// (a held trailing sole's impulse has, and is counted).
 // (With the impulse's moment the wrong way round, the change has the wrong sign: issue 15.)
 TEST(WalkerDynamics, ToeOffImpulseChangesAngularMomentumByItsMoment) {
   const KinematicMap map = kneedWalkerMap(kPerson);
@@ -194,19 +260,18 @@ TEST(WalkerDynamics, ToeOffImpulseChangesAngularMomentumByItsMoment) {
   double worst = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const WalkerState before = stateAtTouchDown(map, random, trial, -0.1);
-    const Point new_contact = position(map, map.swing_foot_centre, before.q, before.stance_foot_x) -
-                              Point(0, map.foot_radius);
-    const Point old_contact = stanceFootCentre(map, before.q, before.stance_foot_x) - Point(0, map.foot_radius);
+    const Soles soles = solesAt(map, before);
     const Point hip = position(map, map.hip, before.q, before.stance_foot_x);
     const double iota = push(pushes);
-    const Point impulse = iota * (hip - old_contact) / std::abs(hip - old_contact);
-    const Point arm = old_contact - new_contact;
-    const double moment = arm.real() * impulse.imag() - arm.imag() * impulse.real();  // z, counter-clockwise
+    const Point impulse = iota * (hip - soles.trailing) / std::abs(hip - soles.trailing);
+    const double moment = momentAbout(soles.landing, soles.trailing, impulse);
     const WalkerState without = afterHeelStrike(map, before, 0.0), with = afterHeelStrike(map, before, iota);
-    const double change = angularMomentum(map, with.q, with.qdot, with.stance_foot_x, new_contact) -
-                          angularMomentum(map, without.q, without.qdot, without.stance_foot_x, new_contact);
-    EXPECT_NEAR(change, moment, 1e-11 * std::abs(moment)) << "trial " << trial << ", ι = " << iota << " N s";  // measured 8e-14
-    worst = std::max(worst, std::abs(change - moment) / std::abs(moment));
+    const double expected = moment + holdMoment(soles, heelStrike(map, before.q, before.qdot, iota, before.knee_on_limit)) -
+                            holdMoment(soles, heelStrike(map, before.q, before.qdot, 0.0, before.knee_on_limit));
+    const double change = angularMomentum(map, with.q, with.qdot, with.stance_foot_x, soles.landing) -
+                          angularMomentum(map, without.q, without.qdot, without.stance_foot_x, soles.landing);
+    EXPECT_NEAR(change, expected, 1e-11 * std::abs(moment)) << "trial " << trial << ", ι = " << iota << " N s" <<  " solved " << heelStrike(map, before.q, before.qdot, iota, before.knee_on_limit).solved << heelStrike(map, before.q, before.qdot, 0.0, before.knee_on_limit).solved << " held " << heelStrike(map, before.q, before.qdot, iota, before.knee_on_limit).trailing_sole_held << heelStrike(map, before.q, before.qdot, 0.0, before.knee_on_limit).trailing_sole_held << " fallen " << with.fallen << without.fallen;  // measured 8e-14
+    worst = std::max(worst, std::abs(change - expected) / std::abs(moment));
   }
   std::cout << "toe-off impulse's moment about the new contact: worst relative error " << worst << "\n";
 }

@@ -90,9 +90,11 @@ TEST(GaitTable, RegriddedKeepsTheSharedPointsAndLeavesTheNewOnesUnsolved) {
 TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
   double worst_residual = 0, worst_speed = 0, worst_step = 0;
+  int pulling = 0, feasible = 0;
   for (int i = 0; i < table.grid.size(); ++i) {
     const GaitTableEntry& e = table.entries[i];
     if (!e.feasible) continue;
+    ++feasible;
     const gait::GaitTarget target = table.grid.target(i);
     EXPECT_NEAR(e.gait.target.speed, target.speed, 1e-12) << "gait " << i;
     if (table.fixed) {
@@ -105,6 +107,7 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
     }
     const dynamics::StrideResult stride = sim.stride(e.gait.controls, e.gait.start);
     ASSERT_TRUE(stride.completed) << "gait " << i;
+    pulling += stride.pulling_heel_strike;
     const double residual = std::max((stride.end.q - e.gait.start.q).lpNorm<Eigen::Infinity>(),
                                      (stride.end.qdot - e.gait.start.qdot).lpNorm<Eigen::Infinity>());
     worst_residual = std::max(worst_residual, residual);
@@ -115,7 +118,13 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
     EXPECT_LT(std::abs(stride.step_length / target.step_length - 1), 0.01) << "gait " << i;
   }
   std::cout << "worst fixed-point residual " << worst_residual << ", speed error " << worst_speed
-            << ", step length error " << worst_step << "\n";
+            << ", step length error " << worst_step << "; " << pulling << " of " << feasible
+            << " gaits land with a pulling ground\n";
+  // The tables were optimised before the heel strike's physics was checked: this many of their
+  // gaits land needing the ground to pull (measured 2026-12-01, with no slip at the landing
+  // foot). Issue 13 regenerates them with a pushing ground; until then, no more than these.
+  const int measured_pulling = GetParam() == std::string("gait_table.yaml") ? 63 : 30;
+  EXPECT_LE(pulling, measured_pulling);
 }
 
 INSTANTIATE_TEST_SUITE_P(Config, ShippedGaitTable,

@@ -113,11 +113,24 @@ Vector5 projectKneePosition(const Matrix5& mass, const Vector5& q, const KneeFla
 // Heel strike (paper eq. 5): the swing foot lands, perfectly inelastic and without slip, the
 // old stance foot is released, the toe-off impulse ι acts at the old stance foot's contact
 // point towards the hip, and knees on their limit stay there unless the impact flexes them.
+// An impact that would drive the trailing sole into the ground holds it on the ground instead
+// (an inelastic, frictionless contact: the sole leaves with no normal velocity; beyond the
+// paper, which is silent). An impact that needs the ground to pull on the landing foot (with no slip, the
+// ground's tangential impulse can ask for it) is no heel strike of this model: physical() is
+// false. The simulator still carries it out and counts it (AdvanceReport::
+// pulling_heel_strikes): the shipped gait tables have such strikes (issue 13).
 // Returns q̇⁺ in the same (pre-swap) labels; swapping legs is the caller's job.
 struct HeelStrike {
   Vector5 qdot_after;
-  KneeFlags knees_held{};        // knees whose limit impulse was needed
-  double ground_normal_impulse;  // along the ground normal at the new contact, ≥ 0 physically
+  KneeFlags knees_held{};             // knees whose limit impulse was needed
+  double ground_normal_impulse = 0;   // along the ground normal at the new contact, ≥ 0 physically
+  bool trailing_sole_held = false;    // the impact would have driven the trailing sole into the ground
+  double trailing_sole_impulse = 0;   // the ground's normal impulse on a held trailing sole, ≥ 0
+  double trailing_sole_rate = 0;      // the old stance sole's velocity along the ground normal
+                                      // after the impact: > 0 lifting, 0 held
+  bool solved = false;                // an active set of knees and soles was found
+
+  bool physical() const { return solved && ground_normal_impulse >= -1e-12; }
 };
 HeelStrike heelStrike(const KinematicMap& map, const Vector5& q, const Vector5& qdot,
                       double toe_off_impulse, const KneeFlags& knees_on_limit);

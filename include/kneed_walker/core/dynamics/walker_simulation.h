@@ -27,10 +27,11 @@ struct WalkerState {
   bool fallen = false;             // fell (or diverged): the state is frozen
 };
 
-// The heel-strike transition: the impact of eq. 5 (heelStrike), then stance and swing
-// labels swapped, the new stance foot's x0 set, the knee flags swapped, the stride clock reset.
+// The heel-strike transition: the impact of eq. 5 (heelStrike, returned in `impact` if given),
+// then stance and swing labels swapped, the new stance foot's x0 set, the knee flags swapped,
+// the stride clock reset.
 WalkerState afterHeelStrike(const KinematicMap& map, const WalkerState& before,
-                            double toe_off_impulse);
+                            double toe_off_impulse, HeelStrike* impact = nullptr);
 
 // Integrals accumulated while simulating, for the gait objective (eq. 9) and energy checks.
 struct TorqueIntegrals {
@@ -59,6 +60,9 @@ struct SimulationOptions {
 
 struct AdvanceReport {
   int heel_strikes = 0;
+  // Heel strikes whose landing needed the ground to pull (HeelStrike::physical() false). They
+  // are simulated as any other, and counted: the shipped gait tables have them (issue 13).
+  int pulling_heel_strikes = 0;
   int knee_limit_events = 0;
   bool fell = false;
   double elapsed = 0;  // model time actually simulated (less than asked at a stop or a fall)
@@ -70,6 +74,7 @@ struct StrideResult {
   double step_length = 0;    // hip displacement along the ground, model length
   double speed = 0;          // step_length / duration
   bool completed = false;    // false: fell before the next heel strike
+  bool pulling_heel_strike = false;  // the heel strike needed the ground to pull (see AdvanceReport)
   TorqueIntegrals integrals;
 };
 
