@@ -132,8 +132,21 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
     std::function<void(sensor_msgs::Image&, sensor_msgs::CameraInfo&)> spoil;
     const char* expected;  // in ~status's message; empty: a good frame
   };
+  // An image of the same grey in another accepted encoding (frameProblem's list).
+  auto recode = [](sensor_msgs::Image& image, const std::string& encoding) {
+    image.encoding = encoding;
+    image.step = image.width * static_cast<uint32_t>(sensor_msgs::image_encodings::numChannels(encoding));
+    image.data.assign(static_cast<size_t>(image.step) * image.height, 128);
+  };
   const std::vector<Case> cases = {
       {"good", [](auto&, auto&) {}, ""},
+      {"rgb8", [&](auto& image, auto&) { recode(image, sensor_msgs::image_encodings::RGB8); }, ""},
+      {"mono8", [&](auto& image, auto&) { recode(image, sensor_msgs::image_encodings::MONO8); }, ""},
+      {"bgra8", [&](auto& image, auto&) { recode(image, sensor_msgs::image_encodings::BGRA8); }, ""},
+      {"rgba8", [&](auto& image, auto&) { recode(image, sensor_msgs::image_encodings::RGBA8); }, ""},
+      {"an unsupported distortion model", [](auto&, auto& info) { info.distortion_model = "equidistant"; },
+       "'equidistant' is not supported"},
+      {"plumb_bob with 8 coefficients", [](auto&, auto& info) { info.D.resize(8); }, "8 coefficients for model 'plumb_bob'"},
       {"no focal length", [](auto&, auto& info) { info.K[0] = 0; }, "no valid focal length"},
       {"NaN focal length", [](auto&, auto& info) { info.K[4] = std::nan(""); }, "no valid focal length"},
       {"NaN distortion", [](auto&, auto& info) { info.D[1] = std::nan(""); }, "not finite"},
