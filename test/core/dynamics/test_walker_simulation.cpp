@@ -206,6 +206,37 @@ TEST(WalkerSimulation, ASwingFootCrossingTheGroundBehindOrRisingIsNoHeelStrike) 
   expectNoHeelStrikeWhileCrossing(-0.25, 0.25, false);   // ahead of it
 }
 
+// The simulator's other rules: a state handed in beyond a knee limit is projected onto it
+// before anything moves, and a stride that lasts longer than max_stride_duration is a fall
+// even with the hip high.
+TEST(WalkerSimulation, OutsideStatesAreProjectedAndAnOverlongStrideIsAFall) {
+  const WalkerSimulator sim(kPerson);
+  WalkerState s;
+  s.q << 0, 0.1, 0.15, -0.2, -0.1;  // both knees hyperextended by 0.05 and 0.1 rad
+  s.qdot << 0, -1.0, -1.0, 0.5, 0.5;
+  ASSERT_LT(kneeFlexion(s.q, 0), 0);
+  ASSERT_LT(kneeFlexion(s.q, 1), 0);
+  sim.advance(WalkerControls{}, s, 1e-6);
+  for (int k = 0; k < kNumKnees; ++k) {  // on the limit (and free to leave it within the microsecond)
+    EXPECT_GE(kneeFlexion(s.q, k), -1e-12) << "knee " << k;
+    EXPECT_LT(kneeFlexion(s.q, k), 1e-5) << "knee " << k;
+  }
+
+  SimulationOptions brief;
+  brief.max_stride_duration = 0.3;  // natural time units; a stride here takes about 2.5
+  const WalkerSimulator impatient(kPerson, brief);
+  WalkerState walking;
+  walking.q << 0, 0.25, 0.25, -0.4, -0.4;
+  walking.qdot << 0, -1.2, -1.2, 0.3, 0.3;
+  walking.knee_on_limit = {true, true};
+  const AdvanceReport report = impatient.advance(WalkerControls{}, walking, 1.0);
+  EXPECT_TRUE(report.fell);
+  EXPECT_EQ(report.heel_strikes, 0);
+  const double limit_s = 0.3 * impatient.naturalTime();
+  EXPECT_GT(report.elapsed, limit_s);
+  EXPECT_LT(report.elapsed, limit_s + 0.02 * impatient.naturalTime() + 1e-12) << "within one step of the limit";
+}
+
 TEST(WalkerSimulation, AFallIsDetectedAndFreezesTheState) {
   const WalkerSimulator sim(kPerson);
   WalkerState s;
