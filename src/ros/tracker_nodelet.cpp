@@ -18,9 +18,12 @@
 //          latched), ~particle_cloud (geometry_msgs/PoseArray, every person's, throttled),
 //          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
 //
-// Threads: the subscriber callback only hands the newest frame to a worker thread and
-// returns; a frame that arrives while the worker is busy replaces the one waiting, which is
-// dropped and counted. The worker runs the tracker (its per-particle work on all cores).
+// Threads: the subscriber callback only queues the frame for a worker thread and returns. Up
+// to ~image_queue_size frames wait; a frame arriving at a full queue pushes out the oldest,
+// which is dropped and counted (1, the default, keeps the newest only: least latency; more
+// lets a bag played near the tracker's rate through its bursts, such as the held frames
+// answered after the background is learned). The worker runs the tracker (its per-particle
+// work on all cores).
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -39,6 +42,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -107,10 +111,11 @@ class TrackerNodelet : public nodelet::Nodelet {
   std::unique_ptr<diagnostic_updater::TimeStampStatus> output_latency_;
   ros::Timer diagnostics_timer_;
 
-  // The frame waiting for the worker (newest wins) and the worker's stop flag.
+  // The frames waiting for the worker (oldest first, at most ~image_queue_size) and the
+  // worker's stop flag.
   std::mutex mutex_;
   std::condition_variable wake_;
-  std::optional<Frame> waiting_;
+  std::deque<Frame> waiting_;
   std::optional<cv::Rect2d> waiting_box_;  // from ~init_box, for the worker's session
   // What dynamic_reconfigure may change (cfg/Tracker.cfg), for the worker: set under mutex_,
   // copied by the worker at each frame.
@@ -250,11 +255,12 @@ void TrackerNodelet::onFrame(const sensor_msgs::ImageConstPtr& image, const sens
     ++frames_received_;
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  if (waiting_) {
+  if (waiting_.size() >= static_cast<size_t>(config_.ros.image_queue_size)) {
+    waiting_.pop_front();
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++frames_dropped_;
   }
-  waiting_ = Frame{image, info};
+  waiting_.push_back(Frame{image, info});
   wake_.notify_one();
 }
 
@@ -294,10 +300,10 @@ void TrackerNodelet::workerLoop() {
     Frame frame;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [this] { return stopping_ || waiting_; });
+      wake_.wait(lock, [this] { return stopping_ || !waiting_.empty(); });
       if (stopping_) return;
-      frame = std::move(*waiting_);
-      waiting_.reset();
+      frame = std::move(waiting_.front());
+      waiting_.pop_front();
     }
     try {
       process(frame);

@@ -21,7 +21,7 @@ namespace kneed_walker::ros_glue {
 struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
   std::string image_transport = "raw";  // raw or compressed (image_transport plugins)
-  int image_queue_size = 1;           // subscriber queue; frames arriving while one is tracked are dropped and counted
+  int image_queue_size = 1;           // frames waiting while one is tracked; a full queue drops its oldest (counted)
   bool publish_particle_cloud = true;  // ~particle_cloud (geometry_msgs/PoseArray)
   double particle_cloud_interval_s = 0.5;  // at most one ~particle_cloud per this interval, s
   bool publish_tf = true;              // body_<id> and joint frames on /tf
