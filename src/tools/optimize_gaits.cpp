@@ -11,8 +11,9 @@
 //
 // A first gait is found by continuation from McGeer's passive walker at the seed point; every
 // other grid point is then solved warm-started from its already solved neighbours (the points
-// with the most solved neighbours first, on all cores), and where those fail, by continuation
-// from the nearest neighbour through the midpoint. The table is rewritten after every
+// with the most solved neighbours first, on all cores; with --seed-table, that table's gait at
+// the point first), and where those fail, by continuation from the nearest neighbour through
+// the midpoint. The table is rewritten after every
 // gait, so an interrupted run continues with --resume.
 #include <unistd.h>
 
@@ -25,6 +26,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/gait/gait_table.h"
@@ -67,6 +69,24 @@ void writeAtomically(const std::string& path, const kw::gait::GaitTable& table) 
   std::filesystem::rename(tmp, path);
 }
 
+// Re-simulates every feasible gait of `table` and marks those that no longer meet the
+// optimiser's constraints (a table written before a rule was added, such as the pushing
+// ground at heel strike) as failed, so that --retry-failed solves them again and --merge never
+// takes them. Returns how many were marked.
+int markStaleGaits(kw::gait::GaitTable& table, const kw::dynamics::BodyProportions& proportions,
+                   const kw::optimizer::GaitOptimizerOptions& options, const std::string& path) {
+  int stale = 0;
+  for (auto& entry : table.entries) {
+    if (!entry.feasible || kw::optimizer::simulatedGait(proportions, entry.gait, options).feasible()) continue;
+    entry.feasible = false;
+    ++stale;
+  }
+  if (stale > 0)
+    std::fprintf(stderr, "optimize_gaits: %d gaits of %s no longer meet the constraints (re-simulated): marked failed\n",
+                 stale, path.c_str());
+  return stale;
+}
+
 std::string clock(double seconds) {
   const int s = static_cast<int>(seconds);
   return std::to_string(s / 60) + ":" + (s % 60 < 10 ? "0" : "") + std::to_string(s % 60);
@@ -95,7 +115,8 @@ int run(int argc, char** argv) {
                  "(the optimiser finds local optima: keep the better of two runs)")->check(CLI::ExistingFile);
   app.add_option("--seed-table", seed_table,
                  "warm-start the seed point from this table's gait there instead of by continuation "
-                 "from McGeer's passive gait")->check(CLI::ExistingFile);
+                 "from McGeer's passive gait, and try its gait at every point first (for --prior-fixed: "
+                 "the free table's gaits reach points that no solved neighbour does)")->check(CLI::ExistingFile);
   app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h")
       ->check(kneed_walker::tools::FiniteRange(0.1, 20))->capture_default_str();
   app.add_option("--seed-step", seed_step, "seed grid point: step length, m")
@@ -138,7 +159,10 @@ int run(int argc, char** argv) {
   if (!merge_table.empty()) {
     try {
       kw::gait::GaitTable table = kw::gait::loadGaitTable(out, proportions);
-      const int taken = kw::gait::keepLowerEffort(table, kw::gait::loadGaitTable(merge_table, proportions));
+      kw::gait::GaitTable other = kw::gait::loadGaitTable(merge_table, proportions);
+      markStaleGaits(table, proportions, {}, out);
+      markStaleGaits(other, proportions, {}, merge_table);
+      const int taken = kw::gait::keepLowerEffort(table, other);
       writeAtomically(out, table);
       int feasible = 0;
       for (const auto& e : table.entries) feasible += e.feasible;
@@ -175,6 +199,7 @@ int run(int argc, char** argv) {
   if (resume && std::filesystem::exists(out)) {
     table = kw::gait::loadGaitTable(out, proportions);
     table = kw::gait::regridded(table, requestedGrid(table.grid));
+    markStaleGaits(table, proportions, options, out);
     if (retry_failed)
       for (auto& e : table.entries)
         if (e.solved && !e.feasible) e.solved = false;
@@ -203,6 +228,13 @@ int run(int argc, char** argv) {
                        std::pow(grid.slopes_rad[c[2]] - seed_slope, 2);
       if (d < best) best = d, seed = i;
     }
+  }
+  // The --seed-table's feasible gaits at this grid's points, tried first at each.
+  std::vector<std::optional<kw::gait::Gait>> seed_gaits(grid.size());
+  if (!seed_table.empty()) {
+    const kw::gait::GaitTable from = kw::gait::regridded(kw::gait::loadGaitTable(seed_table, proportions), grid);
+    for (int i = 0; i < grid.size(); ++i)
+      if (from.entries[i].feasible) seed_gaits[i] = from.entries[i].gait;
   }
   const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
                                         [](const kw::gait::GaitTableEntry& e) { return e.feasible; });
@@ -245,8 +277,8 @@ int run(int argc, char** argv) {
                  tty ? "" : "\n");
   };
 
-  // The next point to solve: unsolved, not in progress, with the most feasible neighbours
-  // (nearest the seed on ties); -1 if none is ready.
+  // The next point to solve: unsolved, not in progress, with the most warm starts (feasible
+  // neighbours, and the seed table's gait there) (nearest the seed on ties); -1 if none is ready.
   auto nextPoint = [&]() {
     int best = -1, best_count = 0;
     double best_distance = 0;
@@ -254,6 +286,7 @@ int run(int argc, char** argv) {
       if (table.entries[i].solved || in_progress[i]) continue;
       int count = 0;
       for (int n : neighbours(grid, i)) count += table.entries[n].feasible;
+      count += seed_gaits[i].has_value();
       const double distance = gridDistance(grid, i, seed);
       if (count > best_count || (count == best_count && count > 0 && distance < best_distance))
         best = i, best_count = count, best_distance = distance;
@@ -282,6 +315,7 @@ int run(int argc, char** argv) {
         return gridDistance(grid, a, point) < gridDistance(grid, b, point);
       });
       std::vector<kw::gait::Gait> warm;
+      if (seed_gaits[point]) warm.push_back(*seed_gaits[point]);
       for (int n : starts) warm.push_back(table.entries[n].gait);
       lock.unlock();
 
@@ -302,12 +336,14 @@ int run(int argc, char** argv) {
         if (found) break;
       }
       // Failing that, continue from the nearest neighbour through the midpoint target.
-      if (!found && !warm.empty()) {
-        const kw::gait::GaitTarget& from = warm.front().target;
+      const size_t nearest = seed_gaits[point] ? 1 : 0;
+      if (!found && warm.size() > nearest) {
+        const kw::gait::Gait& neighbour = warm[nearest];
+        const kw::gait::GaitTarget& from = neighbour.target;
         const kw::gait::GaitTarget middle{0.5 * (from.speed + target.speed),
                                     0.5 * (from.step_length + target.step_length),
                                     0.5 * (from.slope + target.slope)};
-        const kw::optimizer::OptimalGait half = kw::optimizer::optimizeGait(proportions, middle, warm.front(), options);
+        const kw::optimizer::OptimalGait half = kw::optimizer::optimizeGait(proportions, middle, neighbour, options);
         evaluations += half.evaluations;
         if (half.feasible()) {
           const kw::optimizer::OptimalGait gait = kw::optimizer::optimizeGait(proportions, target, half, options);

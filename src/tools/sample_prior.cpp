@@ -57,8 +57,8 @@ int main(int argc, char** argv) {
                 speed_kmh, step_m, slope, count.walked + count.fell, chain, fps, noise_scale, seed);
     std::printf("walking_fraction=%.4f (%d strides ended in a heel strike, %d in a fall)\n",
                 count.fraction(), count.walked, count.fell);
-    std::printf("pulling_heel_strike_fraction=%.4f (%d heel strikes needed the ground to pull)\n",
-                count.walked > 0 ? double(count.pulling) / count.walked : 0.0, count.pulling);
+    std::printf("pulling_landing_falls=%d (of the %d falls, at a heel strike that needed the ground to pull)\n",
+                count.pulling, count.fell);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sample_prior: %s\n", e.what());
     return 1;

@@ -283,9 +283,18 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
       report.elapsed += h_event;
       if (first == Event::kHeelStrike) {
         HeelStrike impact;
-        state = afterHeelStrike(map_, state, controls.toe_off_impulse, &impact);
+        const WalkerState after = afterHeelStrike(map_, state, controls.toe_off_impulse, &impact);
+        report.last_landing_impulse = impact.ground_normal_impulse;
+        if (!impact.physical()) {
+          ++report.pulling_heel_strikes;
+          if (options_.fall_at_pulling_landing) {
+            state.fallen = true;
+            report.fell = true;
+            return report;
+          }
+        }
+        state = after;
         ++report.heel_strikes;
-        report.pulling_heel_strikes += !impact.physical();
       } else {
         applyKneeLimit(state, first == Event::kStanceKnee ? 0 : 1);
         ++report.knee_limit_events;
@@ -318,6 +327,7 @@ StrideResult WalkerSimulator::stride(const WalkerControls& controls,
   const AdvanceReport report = run(controls, result.end, limit * 1.01, true, &result.integrals);
   result.completed = report.heel_strikes > 0 && !report.fell;
   result.pulling_heel_strike = report.pulling_heel_strikes > 0;
+  result.landing_impulse = report.last_landing_impulse;
   result.duration = report.elapsed;
   result.step_length = pointPosition(map_.hip, result.end).real() - hip_start;
   result.speed = result.duration > 0 ? result.step_length / result.duration : 0;

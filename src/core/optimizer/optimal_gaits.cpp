@@ -35,6 +35,7 @@ class GaitProblem {
         options_(options),
         n_(kNumControlVariables + coordinates.size()),
         m_(coordinates.size() + 2) {
+    // c_ holds the m_ equalities of eq. 10, then the landing inequality.
     lower_.assign(n_, 0);
     upper_.assign(n_, 0);
     for (int i = 0; i < kNumControlVariables; ++i) {
@@ -62,7 +63,7 @@ class GaitProblem {
   }
 
   int variables() const { return n_; }
-  int constraints() const { return m_; }
+  int equalityConstraints() const { return m_; }
   const std::vector<double>& lower() const { return lower_; }
   const std::vector<double>& upper() const { return upper_; }
   int evaluations() const { return evaluations_; }
@@ -89,20 +90,22 @@ class GaitProblem {
     return sim_.stride(controls, start);
   }
 
-  // Objective and constraints at x (no gradients).
+  // Objective and constraints at x (no gradients): eq. 10's equalities S(x0) − x0, V − v,
+  // L − ℓ in c[0, m_), and the landing's min_landing_impulse − impulse ≤ 0 in c[m_].
   double evaluate(const double* x, double* c) const {
     dynamics::WalkerControls controls;
     dynamics::WalkerState start;
     const dynamics::StrideResult stride = simulate(x, controls, start);
     if (!stride.completed) {
       // A fall: no periodic gait here. Large, finite values keep SLSQP's line search away.
-      for (int i = 0; i < m_; ++i) c[i] = 10.0;
+      for (int i = 0; i <= m_; ++i) c[i] = 10.0;
       return 1e3;
     }
     const GaitVector end = coordinates_.reduce(stride.end);
     for (int i = 0; i < end.size(); ++i) c[i] = end[i] - x[kNumControlVariables + i];
     c[m_ - 2] = stride.speed - target_.speed;
     c[m_ - 1] = stride.step_length - target_.step_length;
+    c[m_] = options_.min_landing_impulse - stride.landing_impulse;
     return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
   }
 
@@ -112,10 +115,16 @@ class GaitProblem {
     return f_;
   }
 
-  void constraintValues(const double* x, double* c, double* grad) {
+  void equalityValues(const double* x, double* c, double* grad) {
     refresh(x, grad != nullptr);
-    std::copy(c_.begin(), c_.end(), c);
-    if (grad) std::copy(grad_c_.begin(), grad_c_.end(), grad);
+    std::copy(c_.begin(), c_.begin() + m_, c);
+    if (grad) std::copy(grad_c_.begin(), grad_c_.begin() + static_cast<size_t>(m_) * n_, grad);
+  }
+
+  void landingValue(const double* x, double* c, double* grad) {
+    refresh(x, grad != nullptr);
+    c[0] = c_[m_];
+    if (grad) std::copy(grad_c_.begin() + static_cast<size_t>(m_) * n_, grad_c_.end(), grad);
   }
 
  private:
@@ -123,14 +132,14 @@ class GaitProblem {
     const bool same = !x_.empty() && std::equal(x_.begin(), x_.end(), x);
     if (!same) {
       x_.assign(x, x + n_);
-      c_.assign(m_, 0);
+      c_.assign(m_ + 1, 0);
       f_ = evaluate(x, c_.data());
       has_gradient_ = false;
     }
     if (!need_gradient || has_gradient_) return;
     grad_f_.assign(n_, 0);
-    grad_c_.assign(static_cast<size_t>(m_) * n_, 0);
-    std::vector<double> probe = x_, c_plus(m_), c_minus(m_);
+    grad_c_.assign(static_cast<size_t>(m_ + 1) * n_, 0);
+    std::vector<double> probe = x_, c_plus(m_ + 1), c_minus(m_ + 1);
     for (int j = 0; j < n_; ++j) {
       // Central differences, one-sided at a bound (ι ≥ 0 must stay ≥ 0).
       const double h = options_.difference_step * std::max(1.0, std::abs(x_[j]));
@@ -144,7 +153,7 @@ class GaitProblem {
       probe[j] = x_[j];
       const double width = up - down;
       grad_f_[j] = (f_plus - f_minus) / width;
-      for (int i = 0; i < m_; ++i)
+      for (int i = 0; i <= m_; ++i)
         grad_c_[static_cast<size_t>(i) * n_ + j] = (c_plus[i] - c_minus[i]) / width;
     }
     has_gradient_ = true;
@@ -166,9 +175,14 @@ double objectiveCallback(unsigned, const double* x, double* grad, void* data) {
   return static_cast<GaitProblem*>(data)->objective(x, grad);
 }
 
-void constraintCallback(unsigned, double* result, unsigned, const double* x, double* grad,
-                        void* data) {
-  static_cast<GaitProblem*>(data)->constraintValues(x, result, grad);
+void equalityCallback(unsigned, double* result, unsigned, const double* x, double* grad,
+                      void* data) {
+  static_cast<GaitProblem*>(data)->equalityValues(x, result, grad);
+}
+
+void landingCallback(unsigned, double* result, unsigned, const double* x, double* grad,
+                     void* data) {
+  static_cast<GaitProblem*>(data)->landingValue(x, result, grad);
 }
 
 }  // namespace
@@ -184,6 +198,30 @@ double gaitEffort(const dynamics::StrideResult& stride, double toe_off_impulse, 
 
 namespace {
 
+// The stride function the optimiser sees: a landing on a pulling ground is simulated through
+// (not a fall), so that the landing constraint's value goes on smoothly below zero; feasible()
+// refuses such a gait.
+dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& proportions,
+                                             const GaitOptimizerOptions& options) {
+  dynamics::SimulationOptions simulation = options.simulation;
+  simulation.fall_at_pulling_landing = false;
+  return dynamics::WalkerSimulator(dynamics::dimensionlessWalker(proportions), simulation);
+}
+
+// Fills in the figures of a gait whose stride has been simulated from its start.
+void measure(OptimalGait& gait, const GaitOptimizerOptions& options) {
+  const gait::GaitTarget& target = gait.target;
+  gait.effort = gaitEffort(gait.stride, gait.controls.toe_off_impulse, options.weights);
+  gait.periodicity_residual =
+      std::max((gait.stride.end.q - gait.start.q).lpNorm<Eigen::Infinity>(),
+               (gait.stride.end.qdot - gait.start.qdot).lpNorm<Eigen::Infinity>());
+  if (!gait.stride.completed || kneeModes(gait.stride.end) != kneeModes(gait.start))
+    gait.periodicity_residual = std::numeric_limits<double>::infinity();
+  gait.speed_error = std::abs(gait.stride.speed - target.speed) / target.speed;
+  gait.step_length_error = std::abs(gait.stride.step_length - target.step_length) / target.step_length;
+  gait.stride_duration = gait.stride.duration;
+}
+
 // One SLSQP solve in the knee modes of `start`, then a Newton polish of x0.
 OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::GaitTarget& target,
                               const gait::Gait& start, const GaitOptimizerOptions& options) {
@@ -195,8 +233,10 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::
   solver.set_upper_bounds(problem.upper());
   solver.set_min_objective(objectiveCallback, &problem);
   solver.add_equality_mconstraint(
-      constraintCallback, &problem,
-      std::vector<double>(problem.constraints(), options.constraint_tolerance));
+      equalityCallback, &problem,
+      std::vector<double>(problem.equalityConstraints(), options.constraint_tolerance));
+  solver.add_inequality_mconstraint(landingCallback, &problem,
+                                    std::vector<double>(1, options.constraint_tolerance));
   solver.set_xtol_rel(options.relative_tolerance);
   solver.set_maxeval(options.max_iterations);
 
@@ -228,17 +268,8 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::
     result.start = polished.start;
     result.stride = polished.stride;
   }
-  result.effort = gaitEffort(result.stride, result.controls.toe_off_impulse, options.weights);
-  result.periodicity_residual =
-      std::max((result.stride.end.q - result.start.q).lpNorm<Eigen::Infinity>(),
-               (result.stride.end.qdot - result.start.qdot).lpNorm<Eigen::Infinity>());
-  if (!result.stride.completed || kneeModes(result.stride.end) != kneeModes(result.start))
-    result.periodicity_residual = std::numeric_limits<double>::infinity();
-  result.speed_error = std::abs(result.stride.speed - target.speed) / target.speed;
-  result.step_length_error =
-      std::abs(result.stride.step_length - target.step_length) / target.step_length;
+  measure(result, options);
   result.evaluations = problem.evaluations();
-  result.stride_duration = result.stride.duration;
   return result;
 }
 
@@ -246,7 +277,7 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::
 
 OptimalGait optimizeGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
                          const gait::Gait& start, const GaitOptimizerOptions& options) {
-  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(proportions), options.simulation);
+  const dynamics::WalkerSimulator sim = optimiserSimulator(proportions, options);
   OptimalGait result = optimizeInPattern(sim, target, start, options);
   // Which knees stay locked through heel strike is a property of the gait (a stance knee that
   // flexes right at contact is not locked): when the solution ends in other knee modes than it
@@ -352,6 +383,16 @@ OptimalGait seedGait(const dynamics::BodyProportions& proportions, const gait::G
     if (gait.feasible()) break;
   }
   return gait;
+}
+
+OptimalGait simulatedGait(const dynamics::BodyProportions& proportions, const gait::Gait& gait,
+                          const GaitOptimizerOptions& options) {
+  const dynamics::WalkerSimulator sim = optimiserSimulator(proportions, options);
+  OptimalGait result;
+  static_cast<gait::Gait&>(result) = gait;
+  result.stride = sim.stride(gait.controls, gait.start);
+  measure(result, options);
+  return result;
 }
 
 gait::GaitTableEntry tableEntry(const OptimalGait& gait) {

@@ -95,7 +95,11 @@ TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
 }
 
 TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
-  const WalkerSimulator sim(kPerson);
+  // Random walkers land on a pulling ground often (a fall since issue 13); here, where the knee
+  // limits are the subject, they walk on through such landings, so that many strides are seen.
+  SimulationOptions through_every_landing;
+  through_every_landing.fall_at_pulling_landing = false;
+  const WalkerSimulator sim(kPerson, through_every_landing);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
   const double frame = 1.0 / 600;  // dense checks: 20 per 1/30 s frame
@@ -248,6 +252,43 @@ TEST(WalkerSimulation, AFallIsDetectedAndFreezesTheState) {
   const WalkerState frozen = s;
   EXPECT_TRUE(sim.advance(WalkerControls{}, s, 0.1).fell);
   EXPECT_EQ(s.q, frozen.q);
+}
+
+// A landing that needs the ground to pull is a fall (issue 13): McGeer's walker near his gait,
+// pushed off with a toe-off impulse that launches it, is frozen as its foot touches, before the
+// impact; the same stride with fall_at_pulling_landing off is simulated through the landing
+// and counted, with the same (negative) ground impulse; without the push it lands on a
+// pushing ground and walks on.
+TEST(WalkerSimulation, ALandingThatNeedsTheGroundToPullIsAFall) {
+  WalkerControls controls;
+  controls.ground_slope = -0.0456;
+  const WalkerState start = nearMcGeersGait();
+  const WalkerSimulator sim(mcGeerPassiveWalker());
+  const StrideResult passive = sim.stride(controls, start);
+  ASSERT_TRUE(passive.completed);
+  EXPECT_FALSE(passive.pulling_heel_strike);
+  EXPECT_GT(passive.landing_impulse, 0.05);
+
+  controls.toe_off_impulse = 0.5;
+  const StrideResult launched = sim.stride(controls, start);
+  std::cout << "landing impulse: passive " << passive.landing_impulse << ", launched " << launched.landing_impulse << "\n";
+  EXPECT_FALSE(launched.completed);
+  EXPECT_TRUE(launched.pulling_heel_strike);
+  EXPECT_LT(launched.landing_impulse, -0.01);
+  EXPECT_TRUE(launched.end.fallen);
+  EXPECT_EQ(launched.end.heel_strikes, start.heel_strikes) << "frozen before the impact";
+  EXPECT_EQ(launched.end.stance_leg, start.stance_leg);
+  // The swing foot touches the ground where it froze.
+  const Point foot = sim.pointPosition(sim.map().swing_foot_centre, launched.end);
+  EXPECT_NEAR(foot.imag() - sim.map().foot_radius, 0.0, 1e-9);
+
+  SimulationOptions through;
+  through.fall_at_pulling_landing = false;
+  const StrideResult counted = WalkerSimulator(mcGeerPassiveWalker(), through).stride(controls, start);
+  EXPECT_TRUE(counted.completed);
+  EXPECT_TRUE(counted.pulling_heel_strike);
+  EXPECT_EQ(counted.landing_impulse, launched.landing_impulse);
+  EXPECT_EQ(counted.duration, launched.duration);
 }
 
 // Events without end (knee limits chattering ever faster) must not hang a particle: more events

@@ -1,6 +1,7 @@
 #include "kneed_walker/core/optimizer/optimal_gaits.h"
 
 #include "kneed_walker/core/gait/gait_table.h"
+#include "shipped_config.h"
 
 #include <gtest/gtest.h>
 
@@ -38,6 +39,52 @@ TEST(OptimalGaits, SeedsALevelGaitByContinuation) {
   std::cout << "level gait: effort " << gait.effort << ", period " << again.duration
             << ", toe-off impulse " << gait.controls.toe_off_impulse << ", torso stiffness "
             << gait.controls.springs.torso_stiffness << "\n";
+}
+
+// The shipped table's entry at a grid point.
+const gait::GaitTableEntry& entryAt(const gait::GaitTable& table, const gait::GaitTarget& target) {
+  for (int i = 0; i < table.grid.size(); ++i) {
+    const gait::GaitTarget t = table.grid.target(i);
+    if (std::abs(t.speed - target.speed) < 1e-12 && std::abs(t.step_length - target.step_length) < 1e-12 &&
+        t.slope == target.slope)
+      return table.entries[i];
+  }
+  throw std::invalid_argument("no such grid point");
+}
+
+// The landing inequality beside eq. 10 is active in the shipped table: uphill (3.5 km/h, 0.5 m
+// steps, +4.3°) the cheapest gait pushes off so hard that its landing would need the ground to
+// pull (the table before the constraint had it landing at -0.027), and the shipped gait lands
+// at the bound, 0.01. From it, the optimiser with the bound removed finds a cheaper gait that
+// lands lower; with the bound raised to 0.012 it lands at least that hard, at more effort.
+// (Larger changes of the bound are not asked: SLSQP with finite differences, started that far
+// from the constraint, stalls. The table tool's continuation handles those.)
+TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  const gait::GaitTarget uphill = table.grid.target(3.5, 0.5, table.grid.slopes_rad.back());
+  const gait::GaitTableEntry& shipped = entryAt(table, uphill);
+  ASSERT_TRUE(shipped.feasible);
+  const GaitOptimizerOptions bounded;
+  const OptimalGait as_shipped = simulatedGait(table.body, shipped.gait, bounded);
+  ASSERT_TRUE(as_shipped.feasible()) << "residual " << as_shipped.periodicity_residual;
+  EXPECT_NEAR(as_shipped.effort, shipped.quality.effort, 1e-9 * shipped.quality.effort);
+  EXPECT_NEAR(as_shipped.stride.landing_impulse, bounded.min_landing_impulse, 1e-4);
+
+  GaitOptimizerOptions unbounded, raised;
+  unbounded.min_landing_impulse = -1e9;
+  raised.min_landing_impulse = 0.012;
+  const OptimalGait lower = optimizeGait(table.body, uphill, shipped.gait, unbounded);
+  const OptimalGait harder = optimizeGait(table.body, uphill, shipped.gait, raised);
+  std::cout << "landing impulse (effort): shipped " << as_shipped.stride.landing_impulse << " ("
+            << as_shipped.effort << "), unbounded " << lower.stride.landing_impulse << " (" << lower.effort
+            << "), bound 0.012: " << harder.stride.landing_impulse << " (" << harder.effort << ")\n";
+  ASSERT_TRUE(lower.feasible());
+  EXPECT_LT(lower.effort, as_shipped.effort - 1e-3);
+  ASSERT_TRUE(harder.feasible()) << "residual " << harder.periodicity_residual << ", speed error "
+                                 << harder.speed_error << ", step error " << harder.step_length_error;
+  EXPECT_GT(harder.stride.landing_impulse, raised.min_landing_impulse - 5e-4);
+  EXPECT_GT(harder.effort, as_shipped.effort + 1e-3);
+  EXPECT_TRUE(simulatedGait(table.body, harder, raised).feasible());
 }
 
 }  // namespace

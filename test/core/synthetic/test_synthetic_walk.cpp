@@ -72,6 +72,7 @@ TEST(SyntheticWalk, StanceFootDoesNotSkate) {
     SyntheticWalkOptions o = walkOptions(3);
     o.slope_rad = slope;
     o.speed_kmh = 4.0;  // inside the prior table's feasible gaits at both slopes
+    o.step_length_m = 0.8;
     o.duration_s = 6.0;
     const SyntheticWalk walk = synthesizeWalk(table(), prior(), o);
     const double radius_m = dynamics::dimensionlessWalker(dynamics::BodyProportions{}).foot_radius * walk.leg_length_m;

@@ -56,13 +56,23 @@ struct SimulationOptions {
   // More events than this in one advance() (knee limits chattering ever faster: a Zeno
   // sequence that some noisy particle states reach) freeze the walker as fallen.
   int max_events_per_advance = 200;
+  // A heel strike whose landing would need the ground to pull (HeelStrike::physical() false:
+  // the toe-off impulse has launched the body, and stopping the landing foot without slip
+  // would hold it down) is a fall: the foot would slide or the walker fly, which this model
+  // of walking has no phase for. The walker is frozen as it touches. The gait optimiser turns
+  // this off, to see its landing constraint go on smoothly below zero.
+  bool fall_at_pulling_landing = true;
 };
 
 struct AdvanceReport {
   int heel_strikes = 0;
-  // Heel strikes whose landing needed the ground to pull (HeelStrike::physical() false). They
-  // are simulated as any other, and counted: the shipped gait tables have them (issue 13).
+  // Heel strikes whose landing needed the ground to pull (HeelStrike::physical() false): a
+  // fall (fell is set), unless SimulationOptions::fall_at_pulling_landing is off, when they
+  // are simulated as any other and counted.
   int pulling_heel_strikes = 0;
+  // The ground's normal impulse at the last heel strike's new contact (HeelStrike::
+  // ground_normal_impulse), model momentum units; 0 if there was none.
+  double last_landing_impulse = 0;
   int knee_limit_events = 0;
   bool fell = false;
   double elapsed = 0;  // model time actually simulated (less than asked at a stop or a fall)
@@ -73,8 +83,9 @@ struct StrideResult {
   double duration = 0;       // model time
   double step_length = 0;    // hip displacement along the ground, model length
   double speed = 0;          // step_length / duration
-  bool completed = false;    // false: fell before the next heel strike
-  bool pulling_heel_strike = false;  // the heel strike needed the ground to pull (see AdvanceReport)
+  bool completed = false;    // false: fell before the next heel strike (or at it, see below)
+  bool pulling_heel_strike = false;  // the heel strike needed the ground to pull: a fall (see AdvanceReport)
+  double landing_impulse = 0;        // the ground's normal impulse at that heel strike, M √(gL)
   TorqueIntegrals integrals;
 };
 

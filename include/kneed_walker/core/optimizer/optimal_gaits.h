@@ -54,9 +54,10 @@ struct OptimalGait : gait::Gait {
   double step_length_error = 0;     // relative |L − ℓ| / ℓ
   int nlopt_result = 0;             // nlopt::result code of the last solve
   int evaluations = 0;              // strides simulated
+  // Periodic, on target, and landing on a ground that pushes (HeelStrike::physical()).
   bool feasible() const {
-    return stride.completed && periodicity_residual < 1e-6 && speed_error < 0.01 &&
-           step_length_error < 0.01;
+    return stride.completed && !stride.pulling_heel_strike && periodicity_residual < 1e-6 &&
+           speed_error < 0.01 && step_length_error < 0.01;
   }
 };
 
@@ -69,6 +70,11 @@ struct GaitOptimizerOptions {
   double constraint_tolerance = 1e-9;
   double relative_tolerance = 1e-7;  // on the variables
   double difference_step = 1e-6;     // central finite differences
+  // The ground's normal impulse at the heel strike must be at least this, M √(gL) (an
+  // inequality beside eq. 10; the median landing of the unconstrained gaits is about 0.14).
+  // Zero would be the physical limit; the margin keeps strides near the optimum, as noisy
+  // particles take, from landing on a pulling ground.
+  double min_landing_impulse = 0.01;
   dynamics::SimulationOptions simulation;      // of the stride function
 };
 
@@ -89,6 +95,12 @@ OptimalGait initialGaitGuess();
 // feasible() says whether one succeeded.
 OptimalGait seedGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
                      const GaitOptimizerOptions& options = {}, int target_steps = 8);
+
+// A gait (a stored table entry, say) simulated for one stride and measured as optimizeGait
+// measures its results: feasible() says whether it meets eq. 10 and lands on a pushing ground
+// with this simulator.
+OptimalGait simulatedGait(const dynamics::BodyProportions& proportions, const gait::Gait& gait,
+                          const GaitOptimizerOptions& options = {});
 
 // The gait table's record of an optimised gait.
 gait::GaitTableEntry tableEntry(const OptimalGait& gait);

@@ -140,7 +140,7 @@ class WalkerPrior {
 struct WalkingFraction {
   int walked = 0;  // strides that ended in a heel strike
   int fell = 0;    // strides that ended in a fall
-  int pulling = 0;  // heel strikes whose landing needed the ground to pull (AdvanceReport)
+  int pulling = 0;  // of the falls, those at a landing that needed the ground to pull (AdvanceReport)
   double fraction() const { return walked + fell > 0 ? double(walked) / (walked + fell) : 0.0; }
 };
 WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides_per_chain,
