@@ -179,8 +179,9 @@ GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions
     node.read("duration", gait.stride_duration, common::Need::kRequired);
     node.read("speed", quality.speed, common::Need::kRequired);
     node.read("step_length", quality.step_length, common::Need::kRequired);
-    node.read("effort", quality.effort, common::Need::kRequired);
-    // An infeasible gait may be infinitely far from periodic (it fell, or its knees changed).
+    // An infeasible gait may have diverged (unbounded effort) or be infinitely far from
+    // periodic (it fell, or its knees changed).
+    node.read("effort", quality.effort, common::Need::kRequired, true);
     node.read("periodicity_residual", quality.periodicity_residual, common::Need::kRequired, true);
     node.read("nlopt_result", quality.solver_status, common::Need::kRequired);
     node.read("evaluations", quality.evaluations, common::Need::kRequired);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace kneed_walker::core::optimizer {
@@ -400,9 +401,13 @@ gait::GaitTableEntry tableEntry(const OptimalGait& gait) {
   entry.solved = true;
   entry.feasible = gait.feasible();
   entry.gait = gait;
-  entry.quality.speed = gait.stride.speed;
-  entry.quality.step_length = gait.stride.step_length;
-  entry.quality.effort = gait.effort;
+  // A stride that fell or diverged has no speed or step length (NaN after a divergence): it
+  // is recorded as 0, and its effort, if not finite, as infinite, so that the table stays
+  // readable (a failed point is solved again with --retry-failed).
+  entry.quality.speed = gait.stride.completed && std::isfinite(gait.stride.speed) ? gait.stride.speed : 0.0;
+  entry.quality.step_length =
+      gait.stride.completed && std::isfinite(gait.stride.step_length) ? gait.stride.step_length : 0.0;
+  entry.quality.effort = std::isfinite(gait.effort) ? gait.effort : std::numeric_limits<double>::infinity();
   entry.quality.periodicity_residual = gait.periodicity_residual;
   entry.quality.solver_status = gait.nlopt_result;
   entry.quality.evaluations = gait.evaluations;

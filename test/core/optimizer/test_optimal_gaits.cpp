@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 namespace kneed_walker::core::optimizer {
 namespace {
@@ -85,6 +87,30 @@ TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
   EXPECT_GT(harder.stride.landing_impulse, raised.min_landing_impulse - 5e-4);
   EXPECT_GT(harder.effort, as_shipped.effort + 1e-3);
   EXPECT_TRUE(simulatedGait(table.body, harder, raised).feasible());
+}
+
+// A solve whose stride diverged (NaN speed and step length, unbounded effort) is recorded so
+// that the table still loads: optimize_gaits wrote such an entry once, and neither --resume
+// nor any reader could open the table again.
+TEST(OptimalGaits, ADivergedGaitIsRecordedReadably) {
+  gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  OptimalGait diverged;
+  static_cast<gait::Gait&>(diverged) = table.entries[0].gait;
+  diverged.stride.completed = false;
+  diverged.stride.speed = diverged.stride.step_length = std::numeric_limits<double>::quiet_NaN();
+  diverged.effort = std::numeric_limits<double>::quiet_NaN();
+  diverged.periodicity_residual = std::numeric_limits<double>::infinity();
+  table.entries[0] = tableEntry(diverged);
+  EXPECT_FALSE(table.entries[0].feasible);
+  const std::string path = testing::TempDir() + "diverged_gait_table.yaml";
+  gait::saveGaitTable(path, table);
+  const gait::GaitTable back = gait::loadGaitTable(path, test::shippedWalkerModel());
+  std::remove(path.c_str());
+  EXPECT_TRUE(back.entries[0].solved);
+  EXPECT_FALSE(back.entries[0].feasible);
+  EXPECT_EQ(back.entries[0].quality.speed, 0.0);
+  EXPECT_EQ(back.entries[0].quality.step_length, 0.0);
+  EXPECT_EQ(back.entries[0].quality.effort, std::numeric_limits<double>::infinity());
 }
 
 }  // namespace
