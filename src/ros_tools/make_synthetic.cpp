@@ -218,6 +218,7 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   bag.close();
   csv.close();
   if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write (disk full?)");
+  if (!walk.gait_note.empty()) std::fprintf(stderr, "make_synthetic: %s\n", walk.gait_note.c_str());
   if (s.norms.empty())
     std::printf("make_synthetic: %zu frames at %.1f fps, %.2f km/h, %.2f m steps, slope %.3f rad, seed %llu "
                 "(%d prior sample%s)\n",

@@ -65,7 +65,9 @@ int main(int argc, char** argv) {
     const kw::gait::NormSpeedClass& norms = all_norms.speedClass(speed_class);
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
-    const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, 0.0);
+    kw::gait::InterpolationNote note;
+    const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, 0.0, &note);
+    if (!note.exact()) std::fprintf(stderr, "compare_gait_norms: %s\n", note.describe(table.grid).c_str());
     const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
     if (gait.start.stance_leg != kw::dynamics::Leg::kLeft) throw std::runtime_error("expected a left stance start");
 

@@ -45,7 +45,9 @@ int main(int argc, char** argv) {
     const int row_height = static_cast<int>(pixels_per_leg * 2.2);
     cv::Mat figure(3 * row_height, width, CV_8UC3, cv::Scalar(255, 255, 255));
     for (int row = 0; row < 3; ++row) {
-      const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slopes[row]);
+      kw::gait::InterpolationNote note;
+      const kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slopes[row], &note);
+      if (!note.exact()) std::fprintf(stderr, "draw_gaits: %s: %s\n", names[row], note.describe(table.grid).c_str());
       kw::dynamics::SideView view;
       view.ground_slope = slopes[row];
       view.pixels_per_unit = pixels_per_leg;

@@ -44,7 +44,9 @@ int main(int argc, char** argv) {
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
-    kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slope);
+    kw::gait::InterpolationNote note;
+    kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slope, &note);
+    if (!note.exact()) std::fprintf(stderr, "sample_prior: %s\n", note.describe(table.grid).c_str());
     gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
     kw::prior::PriorOptions options = kw::prior::loadPriorOptions(prior_path);
     kw::prior::requirePriorTable(table, options);

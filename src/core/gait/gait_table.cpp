@@ -3,7 +3,9 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -252,12 +254,63 @@ GaitTable regridded(const GaitTable& table, const GaitGrid& grid) {
   return result;
 }
 
+std::string InterpolationNote::describe(const GaitGrid& grid) const {
+  if (exact()) return "";
+  auto point = [&](int index) {
+    const auto c = grid.cell(index);
+    std::ostringstream p;
+    p << grid.speeds_kmh[c[0]] << " km/h, " << grid.step_lengths_m[c[1]] << " m, " << grid.slopes_rad[c[2]] << " rad";
+    return p.str();
+  };
+  std::ostringstream message;
+  message << "the gait table has no feasible gait at ";
+  for (size_t i = 0; i < missing.size(); ++i) message << (i ? "; " : "") << point(missing[i]);
+  if (nearest >= 0)
+    message << ", and none around the target: took the nearest feasible gait, at " << point(nearest);
+  else
+    message << ": interpolated between the cell's other gaits";
+  return message.str();
+}
+
 Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
-                     double slope_rad) {
+                     double slope_rad, InterpolationNote* note) {
   const GaitGrid& g = table.grid;
   const auto [iv, tv] = locate(g.speeds_kmh, speed_kmh, "speed", "km/h");
   const auto [il, tl] = locate(g.step_lengths_m, step_length_m, "step length", "m");
   const auto [is, ts] = locate(g.slopes_rad, slope_rad, "slope", "rad");
+
+  // The corners that weigh, and how much of their weight has a feasible gait.
+  std::array<double, 8> weight{};
+  std::array<int, 8> index{};
+  InterpolationNote found;
+  double feasible_weight = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int dv = corner & 1, dl = (corner >> 1) & 1, ds = (corner >> 2) & 1;
+    weight[corner] = (dv ? tv : 1 - tv) * (dl ? tl : 1 - tl) * (ds ? ts : 1 - ts);
+    index[corner] = g.index(iv + dv, il + dl, is + ds);
+    if (weight[corner] == 0) continue;  // exactly on a face: this corner does not contribute
+    if (table.entries.at(index[corner]).feasible)
+      feasible_weight += weight[corner];
+    else
+      found.missing.push_back(index[corner]);
+  }
+  if (feasible_weight == 0) {
+    // No feasible gait around the target: the nearest feasible grid point, in grid steps.
+    const std::array<double, 3> at{iv + tv, il + tl, is + ts};
+    double best = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < g.size(); ++i) {
+      if (!table.entries[i].feasible) continue;
+      const auto c = g.cell(i);
+      double d = 0;
+      for (int axis = 0; axis < 3; ++axis) d += (c[axis] - at[axis]) * (c[axis] - at[axis]);
+      if (d < best) best = d, found.nearest = i;
+    }
+    if (found.nearest < 0) throw std::out_of_range("the gait table has no feasible gait");
+    weight.fill(0);
+    weight[0] = 1;
+    index[0] = found.nearest;
+    feasible_weight = 1;
+  }
 
   ControlVector controls{};
   Gait result;
@@ -265,18 +318,9 @@ Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_lengt
   result.start.qdot.setZero();
   double best_weight = -1;
   for (int corner = 0; corner < 8; ++corner) {
-    const int dv = corner & 1, dl = (corner >> 1) & 1, ds = (corner >> 2) & 1;
-    const double w = (dv ? tv : 1 - tv) * (dl ? tl : 1 - tl) * (ds ? ts : 1 - ts);
-    const int index = g.index(iv + dv, il + dl, is + ds);
-    const GaitTableEntry& e = table.entries.at(index);
-    if (!e.feasible) {
-      if (w == 0) continue;  // exactly on a face: this corner does not contribute
-      std::ostringstream message;
-      message << "the gait table has no feasible gait at " << g.speeds_kmh[iv + dv] << " km/h, "
-              << g.step_lengths_m[il + dl] << " m, " << g.slopes_rad[is + ds]
-              << " rad, which the target needs";
-      throw std::out_of_range(message.str());
-    }
+    const GaitTableEntry& e = table.entries.at(index[corner]);
+    if (weight[corner] == 0 || !e.feasible) continue;
+    const double w = weight[corner] / feasible_weight;
     const ControlVector c = toControlVector(e.gait.controls);
     for (int k = 0; k < kNumControls; ++k) controls[k] += w * c[k];
     result.start.q += w * e.gait.start.q;
@@ -288,6 +332,7 @@ Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_lengt
   }
   result.target = g.target(speed_kmh, step_length_m, slope_rad);
   result.controls = fromControlVector(controls, slope_rad);
+  if (note) *note = found;
   return result;
 }
 

@@ -43,7 +43,9 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   const double speed_ref_kmh = o.speed_kmh * std::sqrt(reference_leg_m / leg_length_m);
   const double step_ref_m = o.step_length_m * reference_leg_m / leg_length_m;
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
-  walk.gait = gait::interpolateGait(table, speed_ref_kmh, step_ref_m, o.slope_rad);
+  gait::InterpolationNote note;
+  walk.gait = gait::interpolateGait(table, speed_ref_kmh, step_ref_m, o.slope_rad, &note);
+  walk.gait_note = note.describe(table.grid);
   const dynamics::StrideResult stride = sim.stride(walk.gait.controls, walk.gait.start);
   if (!stride.completed)
     throw std::runtime_error("synthetic walk: the interpolated gait does not complete a stride");

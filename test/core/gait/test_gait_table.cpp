@@ -246,51 +246,81 @@ TEST(GaitTable, InterpolatesInsideTheGridAndRefusesOutside) {
   EXPECT_THROW(interpolateGait(table, 5.0, 0.7, 0.2), std::out_of_range);
 }
 
-// Interpolation is trilinear: the middle of a cell whose four corners (at one slope of the grid)
-// are feasible is their mean, controls and start state alike; a target that needs an
-// infeasible corner is refused naming that grid point (issue 15's gait-table contracts).
-TEST(GaitTable, ACellsMiddleIsTheMeanOfItsCornersAndAMissingCornerIsNamed) {
+// Interpolation between a cell's corners: the middle of a cell with four feasible corners (on a
+// slope of the grid) is their mean; with one corner missing it is the mean of the other three,
+// and the note names the missing grid point.
+TEST(GaitTable, ACellsMiddleIsTheMeanOfItsFeasibleCornersAndAMissingCornerIsNamed) {
   const GaitTable& table = shipped();
   const GaitGrid& g = table.grid;
   bool found_full = false, found_hole = false;
   for (int v = 0; v + 1 < static_cast<int>(g.speeds_kmh.size()); ++v)
     for (int l = 0; l + 1 < static_cast<int>(g.step_lengths_m.size()); ++l)
       for (int sl = 0; sl < static_cast<int>(g.slopes_rad.size()); ++sl) {
-        int feasible = 0;
-        for (int corner = 0; corner < 4; ++corner)
-          feasible += table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].feasible;
+        int feasible = 0, missing = -1;
+        for (int corner = 0; corner < 4; ++corner) {
+          const bool ok = table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].feasible;
+          feasible += ok;
+          if (!ok) missing = corner;
+        }
+        if ((feasible == 4 && found_full) || (feasible == 3 && found_hole) || feasible < 3) continue;
         const double speed = 0.5 * (g.speeds_kmh[v] + g.speeds_kmh[v + 1]);
         const double step = 0.5 * (g.step_lengths_m[l] + g.step_lengths_m[l + 1]);
-        if (feasible == 4 && !found_full) {
-          found_full = true;
-          const Gait middle = interpolateGait(table, speed, step, g.slopes_rad[sl]);
-          double hip = 0;
-          dynamics::Vector5 q = dynamics::Vector5::Zero();
-          for (int corner = 0; corner < 4; ++corner) {
-            const Gait& c = table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].gait;
-            hip += 0.25 * c.controls.springs.hip_stiffness;
-            q += 0.25 * c.start.q;
-          }
-          EXPECT_NEAR(middle.controls.springs.hip_stiffness, hip, 1e-12 * std::abs(hip));
-          EXPECT_LT((middle.start.q - q).norm(), 1e-12);
+        InterpolationNote note;
+        const Gait middle = interpolateGait(table, speed, step, g.slopes_rad[sl], &note);
+        double hip = 0;
+        dynamics::Vector5 q = dynamics::Vector5::Zero();
+        for (int corner = 0; corner < 4; ++corner) {
+          const GaitTableEntry& c = table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)];
+          if (!c.feasible) continue;
+          hip += c.gait.controls.springs.hip_stiffness / feasible;
+          q += c.gait.start.q / feasible;
         }
-        if (feasible == 3 && !found_hole) {
+        EXPECT_NEAR(middle.controls.springs.hip_stiffness, hip, 1e-12 * std::abs(hip));
+        EXPECT_LT((middle.start.q - q).norm(), 1e-12);
+        if (feasible == 4) {
+          found_full = true;
+          EXPECT_TRUE(note.exact());
+          EXPECT_EQ(note.describe(g), "");
+        } else {
           found_hole = true;
-          int missing = 0;
-          for (int corner = 0; corner < 4; ++corner)
-            if (!table.entries[g.index(v + (corner & 1), l + (corner >> 1), sl)].feasible) missing = corner;
+          ASSERT_EQ(note.missing.size(), 1u);
+          EXPECT_EQ(note.missing[0], g.index(v + (missing & 1), l + (missing >> 1), sl));
+          EXPECT_EQ(note.nearest, -1);
           std::ostringstream named;
           named << "no feasible gait at " << g.speeds_kmh[v + (missing & 1)] << " km/h, "
                 << g.step_lengths_m[l + (missing >> 1)] << " m";
-          try {
-            interpolateGait(table, speed, step, g.slopes_rad[sl]);
-            ADD_FAILURE() << "a cell with an infeasible corner was interpolated";
-          } catch (const std::out_of_range& e) {
-            EXPECT_NE(std::string(e.what()).find(named.str()), std::string::npos) << e.what();
-          }
+          EXPECT_NE(note.describe(g).find(named.str()), std::string::npos) << note.describe(g);
         }
       }
   EXPECT_TRUE(found_full && found_hole);
+}
+
+// A target with no feasible gait around it (here: at an infeasible grid point, which alone
+// weighs) takes the nearest feasible grid point's gait, in grid steps, and the note says so.
+TEST(GaitTable, ATargetInAHoleTakesTheNearestFeasibleGait) {
+  const GaitTable& table = shipped();
+  const GaitGrid& g = table.grid;
+  int hole = -1;
+  for (int i = 0; i < g.size() && hole < 0; ++i)
+    if (!table.entries[i].feasible) hole = i;
+  ASSERT_GE(hole, 0);
+  const auto h = g.cell(hole);
+  InterpolationNote note;
+  const Gait taken = interpolateGait(table, g.speeds_kmh[h[0]], g.step_lengths_m[h[1]], g.slopes_rad[h[2]], &note);
+  ASSERT_EQ(note.missing, std::vector<int>{hole});
+  ASSERT_GE(note.nearest, 0);
+  const GaitTableEntry& nearest = table.entries[note.nearest];
+  EXPECT_TRUE(nearest.feasible);
+  EXPECT_EQ(taken.start.q, nearest.gait.start.q);
+  EXPECT_EQ(taken.controls.springs.hip_stiffness, nearest.gait.controls.springs.hip_stiffness);
+  auto steps2 = [&](int i) {
+    const auto c = g.cell(i);
+    return (c[0] - h[0]) * (c[0] - h[0]) + (c[1] - h[1]) * (c[1] - h[1]) + (c[2] - h[2]) * (c[2] - h[2]);
+  };
+  for (int i = 0; i < g.size(); ++i)
+    if (table.entries[i].feasible) EXPECT_GE(steps2(i), steps2(note.nearest)) << "grid point " << i << " is nearer";
+  EXPECT_NE(note.describe(g).find("took the nearest feasible gait"), std::string::npos) << note.describe(g);
+  std::cout << note.describe(g) << "\n";
 }
 
 // Of two runs, the lower effort wins per grid point; a feasible gait beats none; tables of

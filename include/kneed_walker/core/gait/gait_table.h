@@ -84,12 +84,24 @@ int keepLowerEffort(GaitTable& table, const GaitTable& other);
 // std::invalid_argument when the grids' reference person or gravity differ.
 GaitTable regridded(const GaitTable& table, const GaitGrid& grid);
 
+// What interpolateGait did at a hole in the table (a grid point without a feasible gait).
+struct InterpolationNote {
+  std::vector<int> missing;  // grid points the target's cell needed and has no feasible gait at
+  int nearest = -1;          // when the cell has none: the nearest feasible grid point taken
+  bool exact() const { return missing.empty(); }
+  // "" when exact; else what was done, naming the grid points in km/h, m and rad.
+  std::string describe(const GaitGrid& grid) const;
+};
+
 // The gait at any (speed, step length, slope) inside the grid: controls and start state
-// interpolated trilinearly between the eight surrounding feasible gaits (dimensionless). Throws
-// std::out_of_range naming the axis for a target outside the grid, or the missing corner gait.
+// interpolated trilinearly between the eight surrounding gaits (dimensionless). At a hole it
+// degrades gracefully: the feasible corners' weights are scaled up to sum to 1, and if the cell
+// has no feasible corner that weighs, the nearest feasible grid point's gait (in grid steps) is
+// taken; `note` (if given) says which points were missing. Throws std::out_of_range naming the
+// axis for a target outside the grid, or when the table has no feasible gait at all.
 // The result's stride_duration is 0: interpolated controls and start are close to, but not
 // exactly on, a periodic stride; simulate one to know its duration.
 Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_length_m,
-                     double slope_rad);
+                     double slope_rad, InterpolationNote* note = nullptr);
 
 }  // namespace kneed_walker::core::gait

@@ -48,6 +48,7 @@ struct SyntheticWalk {
   double leg_length_m = 0;
   vision::GroundPlane ground;
   int attempts = 0;       // prior samples drawn (a sample that fell is discarded)
+  std::string gait_note;  // "" or what the interpolation did at a hole in the table
   std::vector<SyntheticFrame> frames;
 };
 
