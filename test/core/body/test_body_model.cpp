@@ -194,7 +194,7 @@ TEST(BodyModel, StanceFootDoesNotSkate) {
   }
   std::cout << stances << " heel strikes; worst skate over a stance " << worst * 1e3 << " mm\n";
   EXPECT_GE(stances, 3);
-  EXPECT_LT(worst, 1e-3);
+  EXPECT_LT(worst, 1e-3);  // measured 0.12 mm: the 500 Hz frame-to-frame measure's own error
 }
 
 }  // namespace

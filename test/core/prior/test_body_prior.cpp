@@ -57,7 +57,9 @@ TEST(BodyPrior, TheStanceFootRollsWithoutSlidingFrameToFrame) {
     ++frames;
   }
   EXPECT_GT(frames, 30);
-  EXPECT_LT(worst, 1e-9) << "metres";
+  std::cout << "worst slide of the stance foot over a frame " << worst << " m over " << frames << " frames\n";
+  // Measured 2.2e-16 m: the hold is exact up to the rounding of metre-scale positions.
+  EXPECT_LT(worst, 1e-14) << "metres";
 }
 
 }  // namespace

@@ -98,6 +98,7 @@ TEST(TrackingSession, FindsTheWalkerByItselfAndFollowsHer) {
   ASSERT_GT(tracked, 10);
   std::cout << "found at frame " << started_at << "; mean waist error " << 1000 * error_m / tracked << " mm over "
             << tracked << " frames\n";
+  // Measured 181 mm (2026-12-01); loose on purpose, as Tracker.FollowsASyntheticWalk's bound.
   EXPECT_LT(error_m / tracked, 0.35);
 }
 
@@ -177,7 +178,7 @@ TEST(TrackingSession, KeepingTheWholePathGivesOneParticlesPathAtTheEnd) {
   EXPECT_EQ(path.back().pose.joints[body::kWaist], lagged_path.back().pose.joints[body::kWaist]);
   std::cout << "mean slip of the planted foot: whole path " << 1e3 * meanSlipM(path) << " mm, lagged "
             << 1e3 * meanSlipM(lagged_path) << " mm\n";
-  EXPECT_LT(meanSlipM(path), 0.002);
+  EXPECT_LT(meanSlipM(path), 0.002);  // measured 0.56 mm (the README's figure); 8.8 mm lagged
   EXPECT_GT(meanSlipM(lagged_path), 2 * meanSlipM(path));
 }
 
