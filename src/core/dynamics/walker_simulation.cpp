@@ -230,6 +230,8 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
         for (int j = 0; j < kNumJoints; ++j) integrals->squared[j] += step_integrals.squared[j];
         integrals->work += step_integrals.work;
         integrals->scuff += h * 0.5 * (scuffing(at_state) + scuffing(at_trial));  // trapezoid
+        if (std::abs(at_trial.swing_foot_ahead) < window)
+          integrals->passing_clearance = std::min(integrals->passing_clearance, at_trial.swing_clearance);
       }
       state = trial;
       at_state = at_trial;

@@ -92,6 +92,7 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
   double worst_residual = 0, worst_speed = 0, worst_step = 0;
   double lowest_landing = std::numeric_limits<double>::infinity();
+  int feasible = 0, inside_margin = 0, through_ground = 0;  // passing the stance foot
   for (int i = 0; i < table.grid.size(); ++i) {
     const GaitTableEntry& e = table.entries[i];
     if (!e.feasible) continue;
@@ -109,6 +110,9 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
     // A landing on a pulling ground would be a fall: not completed.
     ASSERT_TRUE(stride.completed) << "gait " << i << (stride.pulling_heel_strike ? " lands on a pulling ground" : "");
     lowest_landing = std::min(lowest_landing, stride.landing_impulse);
+    ++feasible;
+    inside_margin += stride.integrals.passing_clearance < dynamics::SimulationOptions{}.clearance_margin;  // dimensionless: L = 1
+    through_ground += stride.integrals.passing_clearance < 0;
     const double residual = std::max((stride.end.q - e.gait.start.q).lpNorm<Eigen::Infinity>(),
                                      (stride.end.qdot - e.gait.start.qdot).lpNorm<Eigen::Infinity>());
     worst_residual = std::max(worst_residual, residual);
@@ -120,10 +124,17 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
   }
   std::cout << "worst fixed-point residual " << worst_residual << ", speed error " << worst_speed
             << ", step length error " << worst_step << "; lowest ground impulse at a landing "
-            << lowest_landing << "\n";
+            << lowest_landing << "; of " << feasible << " gaits " << inside_margin
+            << " pass the stance foot inside the clearance margin, " << through_ground << " through the ground\n";
   // The optimiser asks for at least 0.01 (GaitOptimizerOptions::min_landing_impulse) and
   // SLSQP stops within its tolerance of an active bound: measured 0.0051 and 0.0010.
   EXPECT_GT(lowest_landing, 0.0);
+  // The optima scrape (issue 13: the clearance is not yet a constraint of eq. 10; the soft
+  // scuff penalty lets the sole dip): measured 2026-12-01 at the integrator's step ends, 313 of
+  // the free table's 413 gaits pass the stance foot with the swing sole below the ground (median
+  // -0.5 mm, lowest -1.1 cm of leg length), 97 of the prior's 99 (median -5.4 mm, lowest -1.8
+  // cm). No more than these; the clearance constraint is to bring them to 0.
+  EXPECT_LE(through_ground, GetParam() == std::string("gait_table.yaml") ? 313 : 97);
 }
 
 INSTANTIATE_TEST_SUITE_P(Config, ShippedGaitTable,

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "kneed_walker/core/dynamics/walker_dynamics.h"
 
@@ -41,6 +42,10 @@ struct TorqueIntegrals {
   // swing sole's height: how far the swing foot scuffs (the dynamics ignore scuffing, as in
   // McGeer's walkers; the gait optimisation must not).
   double scuff = 0;
+  // The lowest swing-sole height while the swing foot passes the stance foot (within the
+  // passing window), at the integrator's step ends, model length; +inf if it never passed.
+  // Negative: the sole went through the ground, which the dynamics ignore.
+  double passing_clearance = std::numeric_limits<double>::infinity();
 };
 
 // Step and event settings, in units of the model's natural time √(L/g) (0.31 s for a
