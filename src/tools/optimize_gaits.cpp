@@ -229,27 +229,39 @@ int run(int argc, char** argv) {
       if (d < best) best = d, seed = i;
     }
   }
-  // The --seed-table's feasible gaits at this grid's points, tried first at each.
+  // The --seed-table, and its feasible gaits at this grid's points, tried first at each.
+  std::optional<kw::gait::GaitTable> seed_from;
   std::vector<std::optional<kw::gait::Gait>> seed_gaits(grid.size());
   if (!seed_table.empty()) {
-    const kw::gait::GaitTable from = kw::gait::regridded(kw::gait::loadGaitTable(seed_table, proportions), grid);
+    seed_from = kw::gait::loadGaitTable(seed_table, proportions);
+    const kw::gait::GaitTable on_grid = kw::gait::regridded(*seed_from, grid);
     for (int i = 0; i < grid.size(); ++i)
-      if (from.entries[i].feasible) seed_gaits[i] = from.entries[i].gait;
+      if (on_grid.entries[i].feasible) seed_gaits[i] = on_grid.entries[i].gait;
   }
   const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
                                         [](const kw::gait::GaitTableEntry& e) { return e.feasible; });
   if (!any_feasible) {
     kw::optimizer::OptimalGait gait;
-    if (seed_table.empty()) {
+    if (!seed_table.empty()) {
+      // From the seed table's gait at the seed point; when that does not lead to a gait here
+      // (with the prior's fixed controls imposed, a free gait can land on a pulling ground and
+      // SLSQP stall), from its gaits at the next nearest points, up to 12.
+      std::fprintf(stderr, "optimize_gaits: seeding from %s's gaits, nearest the seed point first...\n",
+                   seed_table.c_str());
+      std::vector<int> order;
+      for (int i = 0; i < grid.size(); ++i)
+        if (seed_gaits[i]) order.push_back(i);
+      std::sort(order.begin(), order.end(),
+                [&](int a, int b) { return gridDistance(grid, a, seed) < gridDistance(grid, b, seed); });
+      for (size_t k = 0; k < order.size() && k < 12 && !gait.feasible(); ++k) {
+        gait = kw::optimizer::optimizeGait(proportions, grid.target(order[k]), *seed_gaits[order[k]], options);
+        if (gait.feasible()) seed = order[k];
+      }
+    }
+    // Without a seed table, or when none of its gaits led to one.
+    if (!gait.feasible()) {
       std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
       gait = kw::optimizer::seedGait(proportions, grid.target(seed), options);
-    } else {
-      std::fprintf(stderr, "optimize_gaits: seeding from %s's gait at the seed point...\n", seed_table.c_str());
-      const kw::gait::GaitTable from = kw::gait::loadGaitTable(seed_table, proportions);
-      const auto c = grid.cell(seed);
-      const kw::gait::Gait warm =
-          kw::gait::interpolateGait(from, grid.speeds_kmh[c[0]], grid.step_lengths_m[c[1]], grid.slopes_rad[c[2]]);
-      gait = kw::optimizer::optimizeGait(proportions, grid.target(seed), warm, options);
     }
     table.entries[seed] = kw::optimizer::tableEntry(gait);
     writeAtomically(out, table);

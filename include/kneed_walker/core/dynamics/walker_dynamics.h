@@ -117,8 +117,7 @@ Vector5 projectKneePosition(const Matrix5& mass, const Vector5& q, const KneeFla
 // (an inelastic, frictionless contact: the sole leaves with no normal velocity; beyond the
 // paper, which is silent). An impact that needs the ground to pull on the landing foot (with no slip, the
 // ground's tangential impulse can ask for it) is no heel strike of this model: physical() is
-// false. The simulator still carries it out and counts it (AdvanceReport::
-// pulling_heel_strikes): the shipped gait tables have such strikes (issue 13).
+// false, and the simulator makes it a fall (SimulationOptions::fall_at_pulling_landing).
 // Returns q̇⁺ in the same (pre-swap) labels; swapping legs is the caller's job.
 struct HeelStrike {
   Vector5 qdot_after;
