@@ -100,15 +100,19 @@ int main(int argc, char** argv) {
                 speed_class.c_str());
     for (int j = 0; j < 3; ++j) {
       const kw::gait::NormCurve& n = norms.curve(kJoints[j]);
-      double sum = 0, lo = 1e9, hi = -1e9;
+      double sum = 0, lo = 1e9, hi = -1e9, model_peak = -1e9, norm_peak = -1e9;
       for (size_t i = 0; i < n.cycle.size(); ++i) {
         const double d = model[i][j] - n.mean[i];
         sum += d * d;
         lo = std::min({lo, n.low[i], model[i][j]});
         hi = std::max({hi, n.high[i], model[i][j]});
+        model_peak = std::max(model_peak, model[i][j]);
+        norm_peak = std::max(norm_peak, n.mean[i]);
       }
       const double rms = std::sqrt(sum / n.cycle.size());
       std::printf("rms_deg_%s=%.1f\n", kShortNames[j], rms);
+      // The largest value over the cycle (for the knee, the swing knee's peak flexion).
+      std::printf("peak_deg_%s=%.1f (norms' mean %.1f)\n", kShortNames[j], model_peak, norm_peak);
       const cv::Point2d corner(margin / 2 + j * (panel_w + margin / 2), margin);
       auto px = [&](double cycle, double value) {
         return cv::Point(static_cast<int>(corner.x + cycle * panel_w),
