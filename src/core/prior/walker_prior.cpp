@@ -129,12 +129,13 @@ WalkerParticle WalkerPrior::sample(double phase, common::Random& random) const {
 }
 
 dynamics::WalkerControls WalkerPrior::controls(const WalkerParticle& p) const {
-  dynamics::WalkerControls c;
+  // The gait's own dampings, swing knee spring and torso rest angle (the fixed values for a
+  // table optimised with them held); the sampled stiffnesses and the noise of eq. 11.
+  dynamics::WalkerControls c = gait_.controls;
   c.ground_slope = gait_.target.slope;
   c.springs.stance_knee_stiffness = p.stiffness[kPriorStanceKnee];
   c.springs.hip_stiffness = p.stiffness[kPriorHip];
   c.springs.torso_stiffness = p.stiffness[kPriorTorso];
-  c = gait::withFixedControls(c, options_.fixed);
   c.offsets.stance_knee = p.noise[dynamics::kStanceKnee];
   c.offsets.swing_knee = p.noise[dynamics::kSwingKnee];
   c.offsets.hip = p.noise[dynamics::kHip];

@@ -42,7 +42,9 @@ TEST(WalkerPrior, SameSeedSameParticles) {
   EXPECT_NE(a.walker.q, c.walker.q) << "another seed, another particle";
 }
 
-TEST(WalkerPrior, ControlsCarryThePapersFixedValues) {
+// The walkers run the gait's dampings, swing-knee spring and torso rest angle; on the prior's
+// table, those are the paper's fixed values.
+TEST(WalkerPrior, ControlsCarryTheGaitsOwnDampingsSwingKneeAndTorsoRest) {
   const Fixture f;
   const WalkerPrior prior(f.sim, f.gait, PriorOptions{});
   common::Random random(1);
@@ -52,6 +54,28 @@ TEST(WalkerPrior, ControlsCarryThePapersFixedValues) {
   EXPECT_DOUBLE_EQ(c.springs.swing_knee_stiffness, 0.0);
   EXPECT_DOUBLE_EQ(c.springs.torso_damping, 1.5);
   EXPECT_DOUBLE_EQ(c.springs.torso_rest_angle, f.gait.target.slope / 3);
+
+  gait::Gait own = f.gait;
+  dynamics::SpringParameters& springs = own.controls.springs;
+  springs.stance_knee_damping = 0.07;
+  springs.swing_knee_damping = 0.09;
+  springs.swing_knee_stiffness = 0.3;
+  springs.swing_knee_rest_angle = 0.2;
+  springs.torso_rest_angle = -0.01;
+  springs.torso_damping = 2.0;
+  const WalkerPrior around_own(f.sim, own, PriorOptions{});
+  const WalkerParticle particle = around_own.sample(0.0, random);
+  const dynamics::SpringParameters ran = around_own.controls(particle).springs;
+  EXPECT_EQ(ran.stance_knee_damping, 0.07);
+  EXPECT_EQ(ran.swing_knee_damping, 0.09);
+  EXPECT_EQ(ran.swing_knee_stiffness, 0.3);
+  EXPECT_EQ(ran.swing_knee_rest_angle, 0.2);
+  EXPECT_EQ(ran.torso_rest_angle, -0.01);
+  EXPECT_EQ(ran.torso_damping, 2.0);
+  // The sampled stiffnesses are the particle's own.
+  EXPECT_EQ(ran.stance_knee_stiffness, particle.stiffness[kPriorStanceKnee]);
+  EXPECT_EQ(ran.hip_stiffness, particle.stiffness[kPriorHip]);
+  EXPECT_EQ(ran.torso_stiffness, particle.stiffness[kPriorTorso]);
 }
 
 TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {

@@ -5,8 +5,9 @@
 //    torso ~ N(gait value, σ̄_j²); the toe-off impulse for the coming contact ~ Exponential.
 //  * Per frame: κ_j(t) ~ N(κ̄_j, σ_j²); the torque noise of eq. 11, η_j(t) = α_j η_j(t−1) +
 //    s_j ε with ε Cauchy (truncated), on the knees, hip, torso and the stance leg against the ground.
-//  * Fixed (paper): knee damping dK1 = dK2 = 0.05, κK2 = 0, torso rest angle φ⁰To = γ/3,
-//    torso damping dTo = 1.5.
+//  * The rest of θ as the gait has it. The prior's table is optimised with the paper's fixed
+//    values held (knee damping dK1 = dK2 = 0.05, κK2 = 0, torso rest angle φ⁰To = γ/3, torso
+//    damping dTo = 1.5), so its gaits carry them; a gait of another table carries its own.
 //  * Then the walker is simulated deterministically over the frame.
 //
 // Units: the gait table's dimensionless ones (leg length 1, body mass 1, g = 1; time in
@@ -45,7 +46,8 @@ enum PriorStiffness : int { kPriorStanceKnee = 0, kPriorHip, kPriorTorso, kNumPr
 struct PriorOptions {
   // The paper's fixed values: knee dampings, swing knee stiffness, torso rest angle per slope
   // and torso damping (in the file as the flat keys knee_damping, swing_knee_stiffness,
-  // torso_rest_per_slope, torso_damping).
+  // torso_rest_per_slope, torso_damping). The walkers take them from the gait; these say
+  // which values the gait table must have been optimised with (requirePriorTable).
   gait::FixedControls fixed;
   // Per-stride means: N(gait value + stride_mean_offset, stride_sd²); per-frame values:
   // N(mean, frame_sd²). The paper raises the stance knee's and torso's means above the optimal
