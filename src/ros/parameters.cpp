@@ -134,6 +134,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("min_gait_step_m", t.min_gait_step_m);
   reader.read("person_breadth_scale", t.person_breadth_scale);
   reader.read("gait_change_probability", t.gait_change_probability);
+  reader.read("lost_likelihood_fraction", t.lost_likelihood_fraction);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
   reader.read("use_optical_flow", config.likelihood.use_flow);

@@ -247,6 +247,10 @@ int main(int argc, char** argv) {
   app.add_option("--gait-change", options.gait_change_probability,
                  "probability that a new stride walks a neighbouring gait of the table (speed changes)")
       ->capture_default_str()->check(FiniteRange(0.0, 1.0));
+  app.add_option("--lost-fraction", options.lost_likelihood_fraction,
+                 "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its "
+                 "recent median (0: below 0 only)")
+      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
   app.add_option("--breadth", options.person_breadth_scale,
                  "the person's torso and thighs this many times as broad as the body model's (a coat, arms)")
       ->capture_default_str()->check(FiniteRange(0.5, 3.0));

@@ -20,10 +20,6 @@ double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// A track is lost after this many frames in a row whose MAP log-likelihood ratio is below 0:
-// the best particle explains the image worse than the background does.
-constexpr int kLostAfterFrames = 3;
-
 }  // namespace
 
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
@@ -218,7 +214,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(filter_options);
   frame_ = 0;
   stamp_s_ = stamp_s;
-  frames_lost_ = 0;
+  loss_ = TrackLossDetector(options_.lost_likelihood_fraction);
   evidence_.clear();
   evidence_frames_.clear();
   evidence_dt_s_.clear();
@@ -318,7 +314,7 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   timing_.dynamics_cpu_ms = 1e-6 * dynamics_ns_;
   timing_.likelihood_cpu_ms = 1e-6 * likelihood_ns_;
   timing_.particle_steps = steps_;
-  frames_lost_ = report.max_log_likelihood < 0 || !std::isfinite(report.max_log_likelihood) ? frames_lost_ + 1 : 0;
+  loss_.update(report.max_log_likelihood);
   timing_.total_ms = msSince(started_at);
   TrackEstimate e = estimate(report);
   last_pose_ = e.pose;
@@ -372,7 +368,7 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   const int best = filter_->best();
   e.pose = pose(particles[best]);
   e.map_log_likelihood = particles[best].log_likelihood;
-  e.lost = frames_lost_ >= kLostAfterFrames;
+  e.lost = loss_.lost();
   e.speed_kmh = bank_[particles[best].gait].speed_kmh;
   e.heading_rad = particles[best].body.placement.value.heading_rad;
   const prior::BodyPrior& prior = *bank_[particles[best].gait].prior;
@@ -421,6 +417,25 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   const double resultant = std::hypot(heading_sin, heading_cos);
   e.heading_sd_rad = std::sqrt(std::max(0.0, -2 * std::log(std::max(resultant, 1e-12))));
   return e;
+}
+
+bool TrackLossDetector::update(double map_log_likelihood) {
+  double floor = 0;
+  if (fraction_ > 0 && recent_count_ >= kLostMedianMinFrames) {
+    std::array<double, kLostMedianFrames> sorted = recent_;
+    const auto end = sorted.begin() + recent_count_;
+    const auto middle = sorted.begin() + recent_count_ / 2;
+    std::nth_element(sorted.begin(), middle, end);
+    floor = std::max(0.0, fraction_ * *middle);
+  }
+  const bool finite = std::isfinite(map_log_likelihood);
+  low_frames_ = !finite || map_log_likelihood < floor ? low_frames_ + 1 : 0;
+  if (finite) {
+    recent_[recent_next_] = map_log_likelihood;
+    recent_next_ = (recent_next_ + 1) % kLostMedianFrames;
+    recent_count_ = std::min(recent_count_ + 1, kLostMedianFrames);
+  }
+  return lost();
 }
 
 }  // namespace kneed_walker::core::tracking

@@ -43,6 +43,8 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "probability that a new stride walks a neighbouring gait");
   checkRange(problems, "person_breadth_scale", o.person_breadth_scale, 0.5, 3.0,
              "factor on the torso's and thighs' breadth");
+  checkRange(problems, "lost_likelihood_fraction", o.lost_likelihood_fraction, 0.0, 1.0,
+             "fraction of the recent median log-likelihood ratio below which frames count towards a lost track");
   checkRange(problems, "min_gait_step_m", o.min_gait_step_m, 0.0, 3.0,
              "shortest step of the table's gaits the particles may walk, m");
   checkRange(problems, "default_frame_interval_s", o.default_frame_interval_s, 1e-4, 1.0,

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <set>
 
@@ -128,6 +130,36 @@ TEST(Tracker, FollowsASyntheticWalk) {
     EXPECT_TRUE(e.pose.joints[body::kHead].allFinite());
   }
   EXPECT_GT(tracker->timing().particle_steps, 0);
+}
+
+// A track is lost after 3 low frames in a row: below 0 always; with a fraction, also below that
+// fraction of the median of the last 20 frames' ratios (once 5 are in).
+TEST(Tracker, ATrackIsLostAfterThreeFramesFarBelowItsRecentLikelihood) {
+  auto feed = [](TrackLossDetector& detector, std::initializer_list<double> ratios) {
+    bool lost = false;
+    for (const double r : ratios) lost = detector.update(r);
+    return lost;
+  };
+  TrackLossDetector paper_rule, relative(0.4);
+  const auto on_the_person = {13.0, 12.0, 14.0, 13.0, 13.5, 12.5, 13.0, 14.0};
+  EXPECT_FALSE(feed(paper_rule, on_the_person));
+  EXPECT_FALSE(feed(relative, on_the_person));
+  // Drifting: positive, but below 0.4 × the median 13 = 5.2.
+  EXPECT_FALSE(feed(relative, {5.0, 4.0}));
+  EXPECT_FALSE(feed(paper_rule, {5.0, 4.0}));
+  EXPECT_TRUE(feed(relative, {3.0})) << "the third low frame in a row";
+  EXPECT_FALSE(feed(paper_rule, {3.0})) << "positive: not lost by the sign alone";
+  EXPECT_FALSE(feed(paper_rule, {-1.0, -2.0}));
+  EXPECT_TRUE(feed(paper_rule, {std::numeric_limits<double>::quiet_NaN()})) << "NaN counts as low";
+  // A frame back above the floor starts the count again; a single dip is no loss.
+  TrackLossDetector dips(0.4);
+  EXPECT_FALSE(feed(dips, on_the_person));
+  EXPECT_FALSE(feed(dips, {4.0, 4.0, 9.0, 4.0, 4.0, 12.0, 4.0}));
+  // Too short a history for a median (under 5 ratios): only the sign counts, so the 5th ratio
+  // here is not low, the 6th is the first low one and the 8th the third.
+  TrackLossDetector early(0.4);
+  EXPECT_FALSE(feed(early, {13.0, 13.0, 13.0, 13.0, 1.0, 1.0, 1.0}));
+  EXPECT_TRUE(feed(early, {1.0}));
 }
 
 TEST(Tracker, SameSeedSameTrackOnOneOrTwoThreads) {

@@ -32,8 +32,9 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.min_gait_step_m = -0.1;
   options.person_breadth_scale = 0.2;
   options.gait_change_probability = std::numeric_limits<double>::quiet_NaN();
+  options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 7u);
+  EXPECT_EQ(problems.size(), 8u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
@@ -41,6 +42,7 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   EXPECT_TRUE(mentions(problems, "min_gait_step_m = -0.1"));
   EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
   EXPECT_TRUE(mentions(problems, "gait_change_probability = nan"));
+  EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
 }
 
 TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {

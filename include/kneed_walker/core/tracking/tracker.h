@@ -82,6 +82,30 @@ struct TrackEstimate {
   bool lost = false;               // the likelihood says the body is no longer where the particles are
 };
 
+// When a track is lost: after kLostAfterFrames frames in a row whose MAP log-likelihood ratio
+// is low. Low is below 0 (the best particle explains the image worse than the background
+// does), or, with TrackerOptions::lost_likelihood_fraction f > 0, below f times the ratio's
+// median over the last kLostMedianFrames frames (once there are kLostMedianMinFrames): a body that drifts onto part of the person and
+// part of the background keeps a positive ratio, but far below what it had while on them.
+class TrackLossDetector {
+ public:
+  static constexpr int kLostAfterFrames = 3;
+  static constexpr int kLostMedianFrames = 20;
+  static constexpr int kLostMedianMinFrames = 5;  // the median needs this many frames
+  explicit TrackLossDetector(double fraction = 0.0) : fraction_(fraction) {}
+  // Takes a frame's MAP log-likelihood ratio (NaN or ±inf is low); returns whether the track
+  // is lost as of this frame.
+  bool update(double map_log_likelihood);
+  bool lost() const { return low_frames_ >= kLostAfterFrames; }
+  void reset() { low_frames_ = recent_count_ = recent_next_ = 0; }
+
+ private:
+  double fraction_;
+  int low_frames_ = 0;
+  std::array<double, kLostMedianFrames> recent_{};  // ring of the last finite ratios
+  int recent_count_ = 0, recent_next_ = 0;
+};
+
 // Time spent on the last frame, milliseconds.
 struct TrackerTiming {
   double precompute_ms = 0;  // wall: the frame's evidence (maps, prefix sums, flow)
@@ -173,7 +197,7 @@ class Tracker {
   cv::Mat previous_grey_;
   int frame_ = 0;
   double stamp_s_ = 0, dt_s_ = 0;
-  int frames_lost_ = 0;
+  TrackLossDetector loss_;
   body::BodyPose last_pose_;
   TrackerTiming timing_;
 };

@@ -43,6 +43,12 @@ struct TrackerOptions {
   // or with arms swinging beside the torso, which the body model does not have, is broader than
   // its bare torso (Winter's proportions). [0.5, 3]
   double person_breadth_scale = 1.0;
+  // A track is lost after 3 frames whose MAP log-likelihood ratio is below 0 or, when this is
+  // above 0, below this fraction of the ratio's median over the last 20 frames
+  // (TrackLossDetector): a body drifting off the person is then lost sooner, and a session
+  // starts again from where it was. 0: below 0 only. Measured on the PETS woman (README):
+  // 0.4 raised her frames at IoU ≥ 0.5 from a median of 88 % to 94 % over seeds 1–6. [0, 1]
+  double lost_likelihood_fraction = 0.0;
 
   // Frames whose stamp gap is not usable (first frame, equal or backwards stamps) are
   // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
