@@ -85,8 +85,10 @@ struct TrackEstimate {
 // When a track is lost: after kLostAfterFrames frames in a row whose MAP log-likelihood ratio
 // is low. Low is below 0 (the best particle explains the image worse than the background
 // does), or, with TrackerOptions::lost_likelihood_fraction f > 0, below f times the ratio's
-// median over the last kLostMedianFrames frames (once there are kLostMedianMinFrames): a body that drifts onto part of the person and
-// part of the background keeps a positive ratio, but far below what it had while on them.
+// median over the last kLostMedianFrames frames (once there are kLostMedianMinFrames): a body
+// that drifts onto part of the person and part of the background keeps a positive ratio, but
+// far below what it had while on them. Low frames enter the median too, so a ratio that stays
+// low for half the window becomes the new level (a person who is harder to see, not a drift).
 class TrackLossDetector {
  public:
   static constexpr int kLostAfterFrames = 3;
@@ -97,7 +99,6 @@ class TrackLossDetector {
   // is lost as of this frame.
   bool update(double map_log_likelihood);
   bool lost() const { return low_frames_ >= kLostAfterFrames; }
-  void reset() { low_frames_ = recent_count_ = recent_next_ = 0; }
 
  private:
   double fraction_;
