@@ -125,6 +125,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("resample_ess_threshold", t.resample_ess_threshold);
   reader.read("resample_lag_frames", t.resample_lag_frames);
   reader.read("resample_mixing", t.resample_mixing);
+  reader.read("initial_oversampling", t.initial_oversampling);
   reader.read("num_threads", t.num_threads);
   reader.read("seed", t.seed);
   reader.read("person_height_m", t.person_height_m);

@@ -270,6 +270,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(0, 30));
   app.add_option("--resample-mixing", options.resample_mixing, "γ: weight of the newest weights in the proposal")
       ->capture_default_str()->check(FiniteRange(0.0, 1.0));
+  app.add_option("--initial-oversampling", options.initial_oversampling,
+                 "a track's first frame weighs this many times --particles candidates from the initial guess and keeps "
+                 "--particles of them")
+      ->capture_default_str()->check(CLI::Range(1, 1000));
   app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str()->check(CLI::Range(0, 256));
   app.add_option("--seed", options.seed, "random seed")->capture_default_str();
   app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str()

@@ -211,6 +211,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   filter_options.num_threads = options_.num_threads;
   filter_options.seed = options_.seed;
   filter_options.keep_paths = options_.keep_whole_path;
+  filter_options.initial_oversampling = options_.initial_oversampling;
   filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(filter_options);
   frame_ = 0;
   stamp_s_ = stamp_s;

@@ -32,6 +32,8 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "frames back to resample from (paper's Δs)");
   checkRange(problems, "resample_mixing", o.resample_mixing, 0.0, 1.0,
              "weight of the current-time weights in the resampling proposal, the paper's gamma");
+  checkRange(problems, "initial_oversampling", o.initial_oversampling, 1, 1000,
+             "candidates per particle drawn and weighed at a track's first frame");
   checkRange(problems, "num_threads", o.num_threads, 0, 256, "worker threads; 0 = all cores");
   checkRange(problems, "person_height_m", o.person_height_m, 1.0, 2.3, "standing height, m");
   checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");

@@ -4,6 +4,7 @@
 
 #include <iostream>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -216,6 +217,53 @@ TEST(AncestryTree, KeepsOnlyLineagesWithDescendants) {
   EXPECT_EQ(tree.liveNodes(), 7u);
 }
 
+// A first frame whose likelihood is 1000 times sharper than the initial distribution: N(0, 10²)
+// drawn, z = 7.3 observed with SD 0.01, so the posterior is N(≈ 7.3, ≈ 0.01²) and 200 draws put
+// about 0.4 within 3 posterior SDs of it. Oversampled 500 times, the 100 000 candidates put about
+// 180 there, and the 200 kept (equal weights) are a sample of the posterior; without it, one or
+// two particles carry the weight.
+TEST(ParticleFilter, InitialOversamplingSamplesASharpFirstPosteriorFromABroadGuess) {
+  const double prior_sd = 10.0, z = 7.3, r = 0.01;
+  const double posterior_variance = 1.0 / (1.0 / (prior_sd * prior_sd) + 1.0 / (r * r));
+  const double posterior_mean = posterior_variance * z / (r * r);
+  auto initialized = [&](int oversampling, int threads) {
+    FilterOptions options;
+    options.num_particles = 200;
+    options.resample_ess_threshold = 20;
+    options.initial_oversampling = oversampling;
+    options.num_threads = threads;
+    ParticleFilter<double> filter(options);
+    const FilterStepReport report = filter.initialize(
+        [&](common::Random& random) { return prior_sd * std::normal_distribution<double>(0, 1)(random); },
+        [&](double& x, int) { return -0.5 * (x - z) * (x - z) / (r * r); }, 0);
+    return std::make_pair(report, filter.states());
+  };
+  const auto [plain_report, plain] = initialized(1, 0);
+  std::cout << "without oversampling: N_eff " << plain_report.effective_sample_size << "\n";
+  EXPECT_LT(plain_report.effective_sample_size, 5);
+
+  const auto [report, states] = initialized(500, 1);
+  ASSERT_EQ(states.size(), 200u);
+  EXPECT_NEAR(report.effective_sample_size, 200, 1e-9);  // equal weights after resampling
+  double mean = 0, second = 0;
+  for (double x : states) mean += x / states.size(), second += x * x / states.size();
+  const double variance = second - mean * mean;
+  const std::vector<double> distinct = [&] {
+    std::vector<double> d = states;
+    std::sort(d.begin(), d.end());
+    d.erase(std::unique(d.begin(), d.end()), d.end());
+    return d;
+  }();
+  std::cout << "oversampled 500 times: mean " << mean << " (posterior " << posterior_mean << "), SD "
+            << std::sqrt(variance) << " (posterior " << std::sqrt(posterior_variance) << "), " << distinct.size()
+            << " distinct of 200\n";
+  EXPECT_GT(distinct.size(), 50u);
+  EXPECT_LT(std::abs(mean - posterior_mean), 0.5 * std::sqrt(posterior_variance));
+  EXPECT_NEAR(variance / posterior_variance, 1.0, 0.5);
+  // Deterministic for the seed on any number of threads.
+  EXPECT_EQ(initialized(500, 2).second, states);
+}
+
 TEST(ParticleFilter, LogSumExpIsStable) {
   EXPECT_NEAR(logSumExp({1000.0, 1000.0}), 1000.0 + std::log(2.0), 1e-12);
   EXPECT_NEAR(logSumExp({-1000.0, -1001.0}), -1000.0 + std::log1p(std::exp(-1.0)), 1e-12);
@@ -229,6 +277,9 @@ TEST(ParticleFilter, RefusesBadOptions) {
   EXPECT_THROW(ParticleFilter<double>{options}, std::invalid_argument);
   options.resample_ess_threshold = 50;
   options.resample_mixing = 1.5;
+  EXPECT_THROW(ParticleFilter<double>{options}, std::invalid_argument);
+  options.resample_mixing = 0.95;
+  options.initial_oversampling = 0;
   EXPECT_THROW(ParticleFilter<double>{options}, std::invalid_argument);
 }
 

@@ -33,8 +33,9 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.person_breadth_scale = 0.2;
   options.gait_change_probability = std::numeric_limits<double>::quiet_NaN();
   options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
+  options.initial_oversampling = 0;
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 8u);
+  EXPECT_EQ(problems.size(), 9u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
@@ -43,6 +44,7 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
   EXPECT_TRUE(mentions(problems, "gait_change_probability = nan"));
   EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
+  EXPECT_TRUE(mentions(problems, "initial_oversampling = 0 is outside [1, 1000]"));
 }
 
 TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {

@@ -9,7 +9,10 @@
 // The model is one callback, propagate(state, frame, random): it advances a state from frame − 1
 // to `frame` by the prior and returns log p(z_frame | state) (the last Δs + 1 frames must stay
 // available to it, for resampling); the state may cache what the next frame needs. The first
-// frame's particles come from sample(random) and are weighed by weigh(state, frame). Log-weights are doubles, normalised by log-sum-exp. Each
+// frame's particles come from sample(random) and are weighed by weigh(state, frame); with
+// FilterOptions::initial_oversampling k > 1, k·N are drawn and weighed and N kept by systematic
+// resampling (sampling importance resampling of the first frame's posterior with k times the
+// particles). Log-weights are doubles, normalised by log-sum-exp. Each
 // particle's ancestry through the buffer is kept, so that the MAP state sequence (the ancestry
 // of the best particle) is available, not only a per-frame mean.
 //
@@ -47,6 +50,10 @@ struct FilterOptions {
   int num_threads = 0;                    // 0: all cores
   std::uint64_t seed = 1;
   bool keep_paths = false;                // keep the ancestry back to the first frame (wholeMapSequence)
+  // The first frame draws and weighs this many times N candidates and keeps N of them by
+  // systematic resampling (equal weights): a broad initial distribution is searched with k·N
+  // samples at k times one frame's cost, once. 1: the N drawn are the particles.
+  int initial_oversampling = 1;           // k ≥ 1
 };
 
 // The genealogy of a particle system, generation by generation, pruned as it grows: a node is
@@ -150,25 +157,39 @@ class ParticleFilter {
     if (options.resample_lag_frames < 0) throw std::invalid_argument("resample_lag_frames must be >= 0");
     if (!(options.resample_mixing >= 0 && options.resample_mixing <= 1))
       throw std::invalid_argument("resample_mixing must lie in [0, 1]");
+    if (options.initial_oversampling < 1) throw std::invalid_argument("initial_oversampling must be >= 1");
   }
 
-  // Draws the particles of the first frame from `sample` and weighs them by that frame.
+  // Draws the particles of the first frame from `sample` and weighs them by that frame (with
+  // initial_oversampling k > 1: draws and weighs k·N, keeps N by systematic resampling).
   FilterStepReport initialize(const std::function<State(common::Random&)>& sample,
                               const Weigh& weigh, int frame) {
     sets_.clear();
     retired_.clear();
     Set set;
     set.frame = frame;
-    set.states.resize(options_.num_particles);
-    set.log_weights.assign(options_.num_particles, 0.0);
-    set.ancestors.assign(options_.num_particles, -1);
-    forChunks(frame, 0, [&](int i, common::Random& random) {
+    const int n = options_.num_particles;
+    const int candidates = n * options_.initial_oversampling;
+    set.states.resize(candidates);
+    set.log_weights.assign(candidates, 0.0);
+    set.ancestors.assign(n, -1);
+    forChunks(frame, 0, candidates, [&](int i, common::Random& random) {
       set.states[i] = sample(random);
       set.log_weights[i] = weigh(set.states[i], frame);
     });
     FilterStepReport report;
     report.max_log_likelihood = *std::max_element(set.log_weights.begin(), set.log_weights.end());
     normalise(set.log_weights);
+    if (candidates > n) {
+      std::vector<double> probabilities(candidates);
+      for (int i = 0; i < candidates; ++i) probabilities[i] = std::exp(set.log_weights[i]);
+      common::Random random(mixSeed(options_.seed, static_cast<std::uint64_t>(frame), kInitialResamplingPass, 0));
+      const std::vector<int> kept = systematic(probabilities, n, std::uniform_real_distribution<double>(0.0, 1.0)(random));
+      std::vector<State> states(n);
+      for (int i = 0; i < n; ++i) states[i] = std::move(set.states[kept[i]]);
+      set.states = std::move(states);
+      set.log_weights.assign(n, -std::log(static_cast<double>(n)));
+    }
     sets_.push_back(std::move(set));
     report.effective_sample_size = report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
     return report;
@@ -263,10 +284,18 @@ class ParticleFilter {
     std::vector<int> ancestors;       // index into the previous set; −1 for the first frame
   };
 
-  // Calls f(i, random) for every particle, chunk by chunk, each chunk with its own generator.
+  // The generator pass of the first frame's resampling of its candidates (the other passes are
+  // 0 and, at frame t, 2t + 1 and 2t + 2).
+  static constexpr std::uint64_t kInitialResamplingPass = ~std::uint64_t{0};
+
+  // Calls f(i, random) for every particle (or the first n items: the initial candidates), chunk
+  // by chunk, each chunk with its own generator.
   template <class F>
   void forChunks(int frame, std::uint64_t pass, F&& f) {
-    const int n = options_.num_particles;
+    forChunks(frame, pass, options_.num_particles, std::forward<F>(f));
+  }
+  template <class F>
+  void forChunks(int frame, std::uint64_t pass, int n, F&& f) {
     const int chunks = (n + kChunk - 1) / kChunk;
     common::parallelFor(chunks, options_.num_threads, [&](int begin, int end) {
       for (int c = begin; c < end; ++c) {
