@@ -20,9 +20,9 @@ body::BodyPose BodyPrior::pose(const BodyParticle& p) const {
 
 BodyParticle BodyPrior::sample(double phase, const Eigen::Vector2d& stance_foot_xy_m, double heading_rad,
                                common::Random& random, body::BodyPose& pose,
-                               std::optional<dynamics::Leg> stance_leg) const {
+                               std::optional<dynamics::Leg> stance_leg, WalkerPrior::Start start) const {
   BodyParticle p;
-  p.walker = walker_prior_.sample(phase, random);
+  p.walker = walker_prior_.sample(phase, random, start);
   if (stance_leg) p.walker.walker.stance_leg = *stance_leg;
   p.placement.value.heading_rad = heading_rad;
   const Eigen::Vector2d heading(std::cos(heading_rad), std::sin(heading_rad));

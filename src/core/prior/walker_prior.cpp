@@ -100,6 +100,13 @@ WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait:
   if (!(gait.stride_duration > 0)) throw std::invalid_argument("WalkerPrior needs a simulated gait");
   gait_stiffness_ = {gait.controls.springs.stance_knee_stiffness,
                      gait.controls.springs.hip_stiffness, gait.controls.springs.torso_stiffness};
+  dynamics::WalkerControls controls = gait_.controls;
+  controls.ground_slope = gait_.target.slope;
+  cycle_[0] = gait_.start;
+  for (int k = 1; k < kCycleStates; ++k) {
+    cycle_[k] = cycle_[k - 1];
+    sim_.advance(controls, cycle_[k], gait_.stride_duration / kCycleStates);
+  }
 }
 
 void WalkerPrior::newStride(WalkerParticle& p, common::Random& random) const {
@@ -118,12 +125,14 @@ void WalkerPrior::newStride(WalkerParticle& p, common::Random& random) const {
   p.stride_of_means = p.walker.heel_strikes;
 }
 
-WalkerParticle WalkerPrior::sample(double phase, common::Random& random) const {
+WalkerParticle WalkerPrior::sample(double phase, common::Random& random, Start start) const {
+  phase = std::clamp(phase, 0.0, 1.0);
+  const int k = start == Start::kFromCycle ? std::min(kCycleStates - 1, static_cast<int>(phase * kCycleStates)) : 0;
   WalkerParticle p;
-  p.walker = gait_.start;
+  p.walker = cycle_[k];  // cycle_[0] is the stride's start
   newStride(p, random);
   p.stiffness = p.stride_mean;
-  sim_.advance(controls(p), p.walker, std::clamp(phase, 0.0, 1.0) * gait_.stride_duration);
+  sim_.advance(controls(p), p.walker, (phase - static_cast<double>(k) / kCycleStates) * gait_.stride_duration);
   p.stride_of_means = p.walker.heel_strikes;
   return p;
 }

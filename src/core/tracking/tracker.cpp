@@ -262,7 +262,9 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
             guess.stance_leg ? *guess.stance_leg
                              : std::bernoulli_distribution(0.5)(random) ? dynamics::Leg::kLeft : dynamics::Leg::kRight;
         body::BodyPose unused;
-        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused, stance);
+        // From the gait's tabulated cycle: the initial search draws initial_oversampling × N.
+        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused, stance,
+                                             prior::WalkerPrior::Start::kFromCycle);
         return p;
       },
       [&](TrackerParticle& p, int frame) { return weigh(p, frame, bank_[p.gait].prior->pose(p.body)); }, 0);

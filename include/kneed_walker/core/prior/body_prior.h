@@ -31,12 +31,13 @@ class BodyPrior {
 
   // A particle at `phase` ∈ [0, 1) of the gait's stride with fresh samples, walking along
   // `heading_rad` with its stance foot's centre above `stance_foot_xy_m`; `pose` receives its
-  // body pose. Draws the walker's samples first, as WalkerPrior::sample. The gait's strides
-  // start on the left leg; `stance_leg` relabels the legs (the walker is symmetric: the other
-  // leg's stance is the same motion half a gait cycle on).
+  // body pose. Draws the walker's samples first, as WalkerPrior::sample (`start` as there). The
+  // gait's strides start on the left leg; `stance_leg` relabels the legs (the walker is
+  // symmetric: the other leg's stance is the same motion half a gait cycle on).
   BodyParticle sample(double phase, const Eigen::Vector2d& stance_foot_xy_m, double heading_rad,
                       common::Random& random, body::BodyPose& pose,
-                      std::optional<dynamics::Leg> stance_leg = std::nullopt) const;
+                      std::optional<dynamics::Leg> stance_leg = std::nullopt,
+                      WalkerPrior::Start start = WalkerPrior::Start::kFromStrike) const;
 
   // s_t ~ p(s_t | s_{t−1}) over dt_s seconds; `pose` receives the body pose at t. Returns what the
   // walker did (a fall freezes it).

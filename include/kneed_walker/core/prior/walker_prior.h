@@ -114,7 +114,14 @@ class WalkerPrior {
               const PriorOptions& options);
 
   // A particle on the gait's periodic stride at `phase` ∈ [0, 1) of it, with fresh samples.
-  WalkerParticle sample(double phase, common::Random& random) const;
+  // kFromStrike: the walker simulated from the stride's start with those samples (up to a
+  // stride, some 50 µs). kFromCycle: from the gait's own cycle, tabulated at construction
+  // (kCycleStates states), the tabulated state at or before `phase` simulated with the samples
+  // over the rest (at most 1/kCycleStates of a stride, a few µs), for the tracker's initial
+  // search, which draws tens of thousands.
+  enum class Start { kFromStrike, kFromCycle };
+  static constexpr int kCycleStates = 64;
+  WalkerParticle sample(double phase, common::Random& random, Start start = Start::kFromStrike) const;
 
   // s_t ~ p(s_t | s_{t−1}) over dt (natural time units): samples, then simulates.
   dynamics::AdvanceReport transition(WalkerParticle& particle, double dt, common::Random& random) const;
@@ -133,6 +140,7 @@ class WalkerPrior {
   gait::Gait gait_;
   PriorOptions options_;
   std::array<double, kNumPriorStiffnesses> gait_stiffness_;
+  std::array<dynamics::WalkerState, kCycleStates> cycle_;  // the gait's stride at phases k / kCycleStates
 };
 
 // How often the prior's sampled strides keep walking. Each chain starts on the gait just after
