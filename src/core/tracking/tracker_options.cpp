@@ -34,6 +34,15 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "weight of the current-time weights in the resampling proposal, the paper's gamma");
   checkRange(problems, "initial_oversampling", o.initial_oversampling, 1, 1000,
              "candidates per particle drawn and weighed at a track's first frame");
+  // The candidates are held at once: their number is bounded too.
+  if (o.num_particles >= 1 && o.initial_oversampling >= 1 &&
+      static_cast<long long>(o.num_particles) * o.initial_oversampling > kMaxInitialCandidates) {
+    std::ostringstream message;
+    message << "initial_oversampling = " << o.initial_oversampling << " times num_particles = " << o.num_particles
+            << " is " << static_cast<long long>(o.num_particles) * o.initial_oversampling
+            << " candidates at a track's first frame, above " << kMaxInitialCandidates << ": lower either";
+    problems.push_back(message.str());
+  }
   checkRange(problems, "num_threads", o.num_threads, 0, 256, "worker threads; 0 = all cores");
   checkRange(problems, "person_height_m", o.person_height_m, 1.0, 2.3, "standing height, m");
   checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");

@@ -56,6 +56,18 @@ TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {
   EXPECT_TRUE(mentions(problems, "resample_ess_threshold = 500"));
 }
 
+TEST(TrackerOptions, InitialCandidatesAreBounded) {
+  TrackerOptions options;
+  options.num_particles = 1000000;
+  options.resample_ess_threshold = 1000;
+  options.initial_oversampling = 1000;
+  const auto problems = validate(options);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_TRUE(mentions(problems, "initial_oversampling = 1000 times num_particles = 1000000 is 1000000000 candidates"));
+  options.initial_oversampling = 10;
+  EXPECT_TRUE(validate(options).empty());
+}
+
 TEST(TrackerOptions, FrameGapMustExceedDefaultInterval) {
   TrackerOptions options;
   options.default_frame_interval_s = 0.5;

@@ -115,7 +115,7 @@ class WalkerPrior {
 
   // A particle on the gait's periodic stride at `phase` ∈ [0, 1) of it, with fresh samples.
   // kFromStrike: the walker simulated from the stride's start with those samples (up to a
-  // stride, some 50 µs). kFromCycle: from the gait's own cycle, tabulated at construction
+  // whole stride: the tracker's 5000 × 32 initial candidates took 11.6 s so). kFromCycle: from the gait's own cycle, tabulated at construction
   // (kCycleStates states), the tabulated state at or before `phase` simulated with the samples
   // over the rest (at most 1/kCycleStates of a stride, a few µs), for the tracker's initial
   // search, which draws tens of thousands.

@@ -157,7 +157,9 @@ class ParticleFilter {
     if (options.resample_lag_frames < 0) throw std::invalid_argument("resample_lag_frames must be >= 0");
     if (!(options.resample_mixing >= 0 && options.resample_mixing <= 1))
       throw std::invalid_argument("resample_mixing must lie in [0, 1]");
-    if (options.initial_oversampling < 1) throw std::invalid_argument("initial_oversampling must be >= 1");
+    if (options.initial_oversampling < 1 ||
+        static_cast<long long>(options.num_particles) * options.initial_oversampling > std::numeric_limits<int>::max())
+      throw std::invalid_argument("initial_oversampling must be >= 1, and times num_particles an int");
   }
 
   // Draws the particles of the first frame from `sample` and weighs them by that frame (with
