@@ -15,6 +15,11 @@
 //                            up to the recovery's approximation, body_model.h)
 //   ground_penetration_mm=   mean depth of the estimated lower sole below the ground
 //                            (truth_ground_penetration_mm= the truth's)
+//   torso_lean_deg=          mean forward lean of the torso (waist to neck) from the vertical
+//                            (truth_torso_lean_deg= the truth's)
+//   knee_at_contact_deg=     mean flexion of a leg's knee at the first frame its foot is on the
+//                            ground again (truth_knee_at_contact_deg= the truth's): with the lean,
+//                            the paper's Fig. 5 findings (more of both walking uphill)
 // and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
 //
 //   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--body ID] [--ground CAMERA.yml] [--lost-mm 150]
@@ -138,17 +143,19 @@ int main(int argc, char** argv) {
     const Eigen::Vector3d up = ground.normal();
     struct Contact {
       double skate_mm = 0, penetration_mm = 0;
+      double lean_deg = 0, knee_at_contact_deg = 0;
+      int landings = 0;
     };
     auto contact = [&](const std::map<int, Pose>& poses) {
-      double skate = 0, penetration = 0;
-      int skate_count = 0, penetration_count = 0;
+      double skate = 0, penetration = 0, lean = 0, knee_at_contact = 0;
+      int skate_count = 0, penetration_count = 0, lean_count = 0, landings = 0;
       struct Feet {
         std::array<kw::body::RollingFoot, 2> feet;  // left, right
         std::array<bool, 2> on_ground{};
         Eigen::Vector3d forward;
         int frame = -2;  // -2: none yet
       } previous;
-      static const char* const kJoints[2][2] = {{"l_knee", "l_ankle"}, {"r_knee", "r_ankle"}};
+      static const char* const kJoints[2][3] = {{"l_knee", "l_ankle", "l_hip"}, {"r_knee", "r_ankle", "r_hip"}};
       for (const auto& [frame, pose] : poses) {
         const bool complete = pose.count("l_hip") && pose.count("r_hip") && pose.count("l_knee") &&
                               pose.count("r_knee") && pose.count("l_ankle") && pose.count("r_ankle");
@@ -166,7 +173,18 @@ int main(int argc, char** argv) {
         }
         penetration += std::max(0.0, -lowest);
         ++penetration_count;
+        if (pose.count("waist") && pose.count("neck")) {
+          const Eigen::Vector3d heading = Eigen::Vector3d(now.forward.x(), now.forward.y(), 0).normalized();
+          lean += kw::body::torsoLeanRad(pose.at("waist"), pose.at("neck"), heading);
+          ++lean_count;
+        }
         if (frame == previous.frame + 1) {
+          for (int side : {0, 1})
+            if (now.on_ground[side] && !previous.on_ground[side]) {
+              knee_at_contact += kw::body::kneeFlexionRad(pose.at(kJoints[side][2]), pose.at(kJoints[side][0]),
+                                                          pose.at(kJoints[side][1]));
+              ++landings;
+            }
           // Rolling moves the centre by −R·Δφ along the walk; the rest, along the ground, is slip.
           const Eigen::Vector3d forward = (now.forward + previous.forward).normalized();
           double least = -1;
@@ -181,8 +199,11 @@ int main(int argc, char** argv) {
         }
         previous = now;
       }
+      constexpr double kDeg = 180 / M_PI;
       return Contact{skate_count ? 1000 * skate / skate_count : 0.0,
-                     penetration_count ? 1000 * penetration / penetration_count : 0.0};
+                     penetration_count ? 1000 * penetration / penetration_count : 0.0,
+                     lean_count ? kDeg * lean / lean_count : 0.0, landings ? kDeg * knee_at_contact / landings : 0.0,
+                     landings};
     };
     const Contact estimated = contact(estimate), true_contact = contact(truth);
     std::printf("frames=%d joints=%d\n", frames, count / frames);
@@ -193,6 +214,10 @@ int main(int argc, char** argv) {
     std::printf("ground_penetration_mm=%.2f\n", estimated.penetration_mm);
     std::printf("truth_footskate_mm=%.2f\n", true_contact.skate_mm);
     std::printf("truth_ground_penetration_mm=%.2f\n", true_contact.penetration_mm);
+    std::printf("torso_lean_deg=%.2f\n", estimated.lean_deg);
+    std::printf("truth_torso_lean_deg=%.2f\n", true_contact.lean_deg);
+    std::printf("knee_at_contact_deg=%.2f (%d landings)\n", estimated.knee_at_contact_deg, estimated.landings);
+    std::printf("truth_knee_at_contact_deg=%.2f (%d landings)\n", true_contact.knee_at_contact_deg, true_contact.landings);
     for (const auto& [joint, e] : per_joint) std::printf("error_mm_%s=%.1f\n", joint.c_str(), 1000 * e.first / e.second);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

@@ -134,4 +134,14 @@ RollingFoot rollingFoot(const Eigen::Vector3d& knee_m, const Eigen::Vector3d& an
   return result;
 }
 
+double torsoLeanRad(const Eigen::Vector3d& waist_m, const Eigen::Vector3d& neck_m, const Eigen::Vector3d& heading) {
+  const Eigen::Vector3d torso = neck_m - waist_m;
+  return std::atan2(torso.dot(heading), torso.z());
+}
+
+double kneeFlexionRad(const Eigen::Vector3d& hip_m, const Eigen::Vector3d& knee_m, const Eigen::Vector3d& ankle_m) {
+  const Eigen::Vector3d thigh = knee_m - hip_m, shank = ankle_m - knee_m;
+  return std::atan2(thigh.cross(shank).norm(), thigh.dot(shank));
+}
+
 }  // namespace kneed_walker::core::body

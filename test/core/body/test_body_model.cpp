@@ -142,6 +142,42 @@ TEST(BodyModel, RollingFootIsRecoveredFromKneeAndAnkle) {
   EXPECT_LT(worst_rotated_m, 0.02);  // measured 8.7 mm: the shank turned about the thigh moves the offset foot
 }
 
+// evaluate reads the torso's lean and the knees' bend back from a pose's joints: in the walker's
+// plane they are the walker's angles, under any heading and slope.
+TEST(BodyModel, TorsoLeanAndKneeFlexionAreReadBackFromTheJoints) {
+  const dynamics::WalkerSimulator& sim = personSimulator();
+  const BodyShape shape = BodyShape::forHeight(1.75);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  double worst_lean_rad = 0, worst_knee_rad = 0, largest_knee_rad = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    dynamics::WalkerState s = walkingState(0.03 * trial);
+    s.q[dynamics::kTorso] = 0.2 * u(rng);
+    BodyPlacement p;
+    p.ground_origin_m = {5 * u(rng), 5 * u(rng)};
+    p.heading_rad = 3 * u(rng);
+    const double slope = 0.17 * u(rng);
+    const BodyPose pose = bodyPose(sim.map(), s, slope, p, shape);
+    const Eigen::Vector3d heading(std::cos(p.heading_rad), std::sin(p.heading_rad), 0);
+    worst_lean_rad = std::max(worst_lean_rad, std::abs(torsoLeanRad(pose.joints[kWaist], pose.joints[kNeck], heading) -
+                                                       (-s.q[dynamics::kTorso] - slope)));
+    const int stance = s.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
+    for (int side = 0; side < 2; ++side) {
+      const bool is_stance = side == stance;
+      const double walker_flexion = std::abs(s.q[is_stance ? dynamics::kStanceThigh : dynamics::kSwingThigh] -
+                                             s.q[is_stance ? dynamics::kStanceShank : dynamics::kSwingShank]);
+      const double read = kneeFlexionRad(pose.joints[kLeftHip + side], pose.joints[kLeftKnee + side], pose.joints[kLeftAnkle + side]);
+      worst_knee_rad = std::max(worst_knee_rad, std::abs(read - walker_flexion));
+      largest_knee_rad = std::max(largest_knee_rad, walker_flexion);
+    }
+  }
+  EXPECT_LT(worst_lean_rad, 1e-12);
+  EXPECT_LT(worst_knee_rad, 1e-12);
+  EXPECT_GT(largest_knee_rad, 0.3) << "the states must bend a knee for the check to mean anything";
+  EXPECT_NEAR(torsoLeanRad({0, 0, 1}, {0.1, 0, 1 + 0.1 * std::sqrt(3.0)}, {1, 0, 0}), M_PI / 6, 1e-12) << "forward is positive";
+  EXPECT_NEAR(kneeFlexionRad({0, 0, 1}, {0, 0, 0.5}, {-0.5, 0, 0.5}), M_PI / 2, 1e-12);
+}
+
 TEST(BodyModel, StanceFootRestsOnASlopedGround) {
   const dynamics::WalkerSimulator& sim = personSimulator();
   const dynamics::WalkerState s = walkingState(0.2);

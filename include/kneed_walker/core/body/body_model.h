@@ -114,4 +114,14 @@ struct RollingFoot {
 RollingFoot rollingFoot(const Eigen::Vector3d& knee_m, const Eigen::Vector3d& ankle_m, const Eigen::Vector3d& forward,
                         const Eigen::Vector3d& up, const FootGeometry& foot);
 
+// Sagittal posture read back from a pose's joints (evaluate's torso lean and knee bend at
+// contact, the paper's Fig. 5 findings). The torso's forward lean from the vertical (world Z),
+// positive towards `heading` (the horizontal unit walking direction): the waist-to-neck line's
+// angle; for a body in the walker's plane, −φTo − γ (walker angles are measured from the slope's
+// normal, counter-clockwise).
+double torsoLeanRad(const Eigen::Vector3d& waist_m, const Eigen::Vector3d& neck_m, const Eigen::Vector3d& heading);
+// A knee's flexion: the angle between the thigh (hip to knee) and the shank (knee to ankle), 0
+// when straight; for a body in the walker's plane, |φthigh − φshank|.
+double kneeFlexionRad(const Eigen::Vector3d& hip_m, const Eigen::Vector3d& knee_m, const Eigen::Vector3d& ankle_m);
+
 }  // namespace kneed_walker::core::body
