@@ -199,6 +199,21 @@ int run(int argc, char** argv) {
   if (resume && std::filesystem::exists(out)) {
     table = kw::gait::loadGaitTable(out, proportions);
     table = kw::gait::regridded(table, requestedGrid(table.grid));
+    if (prior_fixed && !table.fixed)
+      throw std::invalid_argument(out + " was optimised freely: --prior-fixed cannot resume it");
+    if (prior_fixed && *table.fixed != kw::gait::FixedControls{}) {
+      // The prior's fixed values changed since the table was made: its gaits take the new ones,
+      // and those that then no longer close their cycle are marked failed just below (a gait on
+      // the level keeps its torso rest angle, 0 either way).
+      std::fprintf(stderr, "optimize_gaits: %s holds other fixed controls than the prior's: its gaits take the prior's\n",
+                   out.c_str());
+      table.fixed = kw::gait::FixedControls{};
+      for (auto& entry : table.entries) {
+        entry.gait.controls.ground_slope = entry.gait.target.slope;
+        entry.gait.controls = kw::gait::withFixedControls(entry.gait.controls, *table.fixed);
+      }
+    }
+    options.fixed = table.fixed;
     markStaleGaits(table, proportions, options, out);
     if (retry_failed)
       for (auto& e : table.entries)

@@ -17,7 +17,7 @@ constexpr int kNumControlVariables = gait::kNumControls;
 // Bounds of the controls, dimensionless (torque unit M g L, time unit √(L/g)). The torso
 // spring must hold the torso up against gravity (its gravity torque about the hip is about
 // 0.23 φ), so κTo ≥ 0.5 and dTo ≥ 0.1; its rest angle stays within ±0.15 rad of the vertical (the paper's
-// prior puts it at γ/3), else the optimum turns the torso spring into a constant hip motor
+// prior leans it γ/3 into the slope), else the optimum turns the torso spring into a constant hip motor
 // with the torso leaning far forward.
 constexpr double kControlLower[kNumControlVariables] = {0, 0, 0, 0, 0, 0, 0.5, -0.15, 0.1, 0};
 constexpr double kControlUpper[kNumControlVariables] = {30, 5, 5, 1.5, 5, 30, 50, 0.15, 20, 0.5};

@@ -201,7 +201,7 @@ TEST(WalkerPrior, NoiseInnovationsAndStiffnessSpreadFollowEquation11) {
 
 // Through sampled chains with the noise on: a stride's values are drawn at each heel strike and
 // only then (the transition after it), the knees never hyperextend, and on a sloped gait the
-// torso's rest angle is the paper's γ/3.
+// torso rests at the paper's γ/3 into the slope from the vertical: −4γ/3 in the walker's frame.
 TEST(WalkerPrior, StridesAreDrawnAtHeelStrikesKneesStayFlexedTorsoRestsAtAThirdOfTheSlope) {
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(test::shippedWalkerModel()));
   const gait::GaitTable table = gait::loadGaitTable(kTable, test::shippedWalkerModel());
@@ -225,7 +225,7 @@ TEST(WalkerPrior, StridesAreDrawnAtHeelStrikesKneesStayFlexedTorsoRestsAtAThirdO
       if (p.walker.fallen) break;
       least_flexion = std::min({least_flexion, p.walker.q[dynamics::kStanceThigh] - p.walker.q[dynamics::kStanceShank],
                                 p.walker.q[dynamics::kSwingThigh] - p.walker.q[dynamics::kSwingShank]});
-      EXPECT_NEAR(prior.controls(p).springs.torso_rest_angle, slope / 3, 1e-12);
+      EXPECT_NEAR(prior.controls(p).springs.torso_rest_angle, -4 * slope / 3, 1e-12);
     }
   }
   std::cout << transitions << " transitions, " << strikes << " heel strikes, " << redrawn

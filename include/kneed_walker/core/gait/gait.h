@@ -27,11 +27,16 @@ struct Gait {
 // The controls that the prior holds fixed (paper §3.4): knee dampings dK1 = dK2, the swing
 // knee's stiffness κK2 (its rest angle is then irrelevant: held at 0), the torso's rest angle
 // φ⁰To = torso_rest_per_slope × γ and its damping dTo. Gaits optimised with them held are the
-// ones the prior can follow (config/prior_gait_table.yaml).
+// ones the prior can follow (config/prior_gait_table.yaml). The paper's φ⁰To = γ/3 is a lean of
+// γ/3 into the slope from the vertical ("a slight lean of the torso into the slope", its Fig. 5;
+// forward uphill, back downhill, §3.3); walker angles are measured from the slope's normal,
+// counter-clockwise (an upright torso is at −γ, a forward lean negative), so that is
+// φ⁰To = −γ − γ/3 = −4γ/3. Read as +γ/3 in the walker's frame, the torso leaned back
+// 4γ/3 = 5.7° from the vertical on a 4.3° climb (evaluate's torso_lean_deg on the uphill walk).
 struct FixedControls {
   double knee_damping = 0.05;
   double swing_knee_stiffness = 0.0;
-  double torso_rest_per_slope = 1.0 / 3;
+  double torso_rest_per_slope = -4.0 / 3;
   double torso_damping = 1.5;
   bool operator==(const FixedControls& other) const;
   bool operator!=(const FixedControls& other) const { return !(*this == other); }
