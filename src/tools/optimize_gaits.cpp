@@ -4,7 +4,7 @@
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
 //                                      [--prior-fixed] [--seed-table config/gait_table.yaml]
-//                                      [--speeds 1.5,2,...,7] [--step-lengths 0.5,...,1]
+//                                      [--speeds 1.5,2,...,7] [--step-lengths 0.5,...,1] [--slopes -0.075,...,0.075]
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
 // config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
@@ -123,7 +123,7 @@ int run(int argc, char** argv) {
       ->check(kneed_walker::tools::FiniteRange(0.1, 3))->capture_default_str();
   app.add_option("--seed-slope", seed_slope, "seed grid point: slope, rad")
       ->check(kneed_walker::tools::FiniteRange(-0.5, 0.5))->capture_default_str();
-  std::vector<double> speeds_kmh, step_lengths_m;
+  std::vector<double> speeds_kmh, step_lengths_m, slopes_rad;
   app.add_option("--speeds", speeds_kmh,
                  "the grid's speeds, km/h, ascending, comma-separated (default the paper's 3-7 by 0.5; "
                  "with --resume, the table is carried over to the new grid)")
@@ -131,11 +131,16 @@ int run(int argc, char** argv) {
   app.add_option("--step-lengths", step_lengths_m,
                  "the grid's step lengths, m, ascending, comma-separated (default the paper's 0.5-1.0 by 0.1)")
       ->delimiter(',')->check(kneed_walker::tools::FiniteRange(0.1, 3));
+  app.add_option("--slopes", slopes_rad,
+                 "the grid's ground slopes, rad, positive uphill, ascending, comma-separated (default the "
+                 "paper's -4.3 to 4.3 degrees by 2.15)")
+      ->delimiter(',')->check(kneed_walker::tools::FiniteRange(-0.3, 0.3));
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"}}) {
+  for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"},
+                                   std::pair{&slopes_rad, "--slopes"}}) {
     if (axis->size() == 1) {
       std::fprintf(stderr, "optimize_gaits: %s needs at least two values (a grid axis)\n", name);
       return 1;
@@ -194,6 +199,7 @@ int run(int argc, char** argv) {
   auto requestedGrid = [&](kw::gait::GaitGrid grid) {
     if (!speeds_kmh.empty()) grid.speeds_kmh = speeds_kmh;
     if (!step_lengths_m.empty()) grid.step_lengths_m = step_lengths_m;
+    if (!slopes_rad.empty()) grid.slopes_rad = slopes_rad;
     return grid;
   };
   if (resume && std::filesystem::exists(out)) {
