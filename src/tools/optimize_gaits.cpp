@@ -214,12 +214,9 @@ int run(int argc, char** argv) {
       std::fprintf(stderr, "optimize_gaits: %s holds other fixed controls than the prior's: its gaits take the prior's\n",
                    out.c_str());
       table.fixed = kw::gait::FixedControls{};
-      for (auto& entry : table.entries) {
-        entry.gait.controls.ground_slope = entry.gait.target.slope;
+      for (auto& entry : table.entries)
         entry.gait.controls = kw::gait::withFixedControls(entry.gait.controls, *table.fixed);
-      }
     }
-    options.fixed = table.fixed;
     markStaleGaits(table, proportions, options, out);
     if (retry_failed)
       for (auto& e : table.entries)
