@@ -81,16 +81,18 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
     PartOutline& outline = outlines[p];
     const body::PartShape& part = shape.parts[p];
     const PartFrame frame = partFrame(pose, axes, p);
-    const Eigen::Vector3d &across = frame.across, &depth = frame.depth;
+    // The ellipses' axes in the camera frame: a sample is then 6 multiply-adds from its pixel.
+    const Eigen::Vector3d across = camera.toCameraDirection(frame.across);
+    const Eigen::Vector3d depth = camera.toCameraDirection(frame.depth);
     std::array<Eigen::Vector2d, 2 * kOutlineSamples> points;
     outline.visible = true;
     for (int end = 0; end < 2 && outline.visible; ++end) {
-      const Eigen::Vector3d& centre = end == 0 ? axes.proximal[p] : axes.distal[p];
+      const Eigen::Vector3d centre = camera.toCamera(end == 0 ? axes.proximal[p] : axes.distal[p]);
       const double half_width = 0.5 * (end == 0 ? part.proximal_width_m : part.distal_width_m);
       const double half_depth = 0.5 * (end == 0 ? part.proximal_depth_m : part.distal_depth_m);
       for (int i = 0; i < kOutlineSamples; ++i) {
-        const auto pixel = camera.project(centre + half_width * cosines[i] * across +
-                                          half_depth * sines[i] * depth);
+        const auto pixel = camera.projectFromCamera(centre + half_width * cosines[i] * across +
+                                                    half_depth * sines[i] * depth);
         if (!pixel) {
           outline.visible = false;
           break;

@@ -11,12 +11,6 @@
 #include "kneed_walker/core/common/config_file.h"
 
 namespace kneed_walker::core::vision {
-namespace {
-
-constexpr double kMinimumDepthM = 0.01;
-
-}  // namespace
-
 Camera::Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& distortion,
                const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation_m,
                int width_px, int height_px)
@@ -41,6 +35,7 @@ Camera::Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& dis
   if (n >= 4) k1_ = d[0], k2_ = d[1], p1_ = d[2], p2_ = d[3];
   if (n >= 5) k3_ = d[4];
   if (n == 8) k4_ = d[5], k5_ = d[6], k6_ = d[7];
+  rational_ = k4_ != 0 || k5_ != 0 || k6_ != 0;
   if (!rotation.allFinite() ||
       (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
       rotation.determinant() < 0)
@@ -80,18 +75,6 @@ Camera Camera::load(const std::string& path, double file_length_unit_m) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());
   }
-}
-
-std::optional<Eigen::Vector2d> Camera::project(const Eigen::Vector3d& world_m) const {
-  const Eigen::Vector3d c = rotation_ * world_m + translation_;
-  if (c.z() <= kMinimumDepthM) return std::nullopt;
-  // OpenCV's distortion model (cv::projectPoints without thin prism or tilt).
-  const double x = c.x() / c.z(), y = c.y() / c.z();
-  const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
-  const double radial = (1 + k1_ * r2 + k2_ * r4 + k3_ * r6) / (1 + k4_ * r2 + k5_ * r4 + k6_ * r6);
-  const double xd = x * radial + 2 * p1_ * x * y + p2_ * (r2 + 2 * x * x);
-  const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
-  return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
 }
 
 void Camera::save(const std::string& path, double file_length_unit_m) const {

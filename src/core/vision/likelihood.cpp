@@ -67,41 +67,40 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
   if (static_cast<int>(spans.left.size()) < spans.rows) {
     spans.left.resize(spans.rows);
     spans.right.resize(spans.rows);
+    spans.chain_x[0].resize(spans.rows);
+    spans.chain_x[1].resize(spans.rows);
   }
-  thread_local std::vector<double> thread_lo, thread_hi;
-  std::vector<double>& lo = thread_lo;  // one thread-local look-up per call
-  std::vector<double>& hi = thread_hi;
-  if (static_cast<int>(lo.size()) < spans.rows) lo.resize(spans.rows), hi.resize(spans.rows);
-  std::fill(lo.begin(), lo.begin() + spans.rows, 1e300);
-  std::fill(hi.begin(), hi.begin() + spans.rows, -1e300);
+  // A convex outline in order is two chains from its top to its bottom vertex, one of edges
+  // going down, one going up; every row between crosses each chain once. Each edge writes its
+  // chain's x on its rows, and a row's span lies between its two chains' x.
   for (int i = 0; i < outline.size; ++i) {
     const Eigen::Vector2d& p = outline.hull[i];
     const Eigen::Vector2d& q = outline.hull[(i + 1) % outline.size];
-    const double top = std::min(p.y(), q.y()), bottom = std::max(p.y(), q.y());
-    const int r0 = static_cast<int>(std::ceil(top)), r1 = static_cast<int>(std::floor(bottom));
-    if (p.y() == q.y()) {
-      if (r0 == r1 && r0 >= spans.first_row && r0 < spans.first_row + spans.rows) {
-        const int k = r0 - spans.first_row;
-        lo[k] = std::min({lo[k], p.x(), q.x()});
-        hi[k] = std::max({hi[k], p.x(), q.x()});
-      }
+    const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
+    const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
+    if (r0 > r1) continue;
+    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data() - spans.first_row;
+    if (p.y() == q.y()) {  // a level edge on a pixel row: its ends are the chains' ends there
+      spans.chain_x[0][r0 - spans.first_row] = p.x();
+      spans.chain_x[1][r0 - spans.first_row] = q.x();
       continue;
     }
     const double slope = (q.x() - p.x()) / (q.y() - p.y());
-    for (int r = std::max(r0, spans.first_row); r <= std::min(r1, spans.first_row + spans.rows - 1); ++r) {
-      const double x = p.x() + (r - p.y()) * slope;
-      const int k = r - spans.first_row;
-      lo[k] = std::min(lo[k], x);
-      hi[k] = std::max(hi[k], x);
-    }
+    for (int r = r0; r <= r1; ++r) chain[r] = p.x() + (r - p.y()) * slope;
   }
+  // ceil and floor by truncation and a correction (exact; the compiler vectorises it, where
+  // std::ceil without SSE4.1 is a branchy sequence per row).
+  const double* chain_a = spans.chain_x[0].data();
+  const double* chain_b = spans.chain_x[1].data();
+  int* left = spans.left.data();
+  int* right = spans.right.data();
   for (int k = 0; k < spans.rows; ++k) {
-    if (lo[k] > hi[k]) {
-      spans.left[k] = spans.right[k] = 0;
-      continue;
-    }
-    spans.left[k] = static_cast<int>(std::ceil(lo[k]));
-    spans.right[k] = std::max(spans.left[k], static_cast<int>(std::floor(hi[k])) + 1);
+    const double lo = std::min(chain_a[k], chain_b[k]), hi = std::max(chain_a[k], chain_b[k]);
+    const int lo_truncated = static_cast<int>(lo), hi_truncated = static_cast<int>(hi);
+    const int ceil_lo = lo_truncated + (static_cast<double>(lo_truncated) < lo);
+    const int floor_hi = hi_truncated - (static_cast<double>(hi_truncated) > hi);
+    left[k] = ceil_lo;
+    right[k] = std::max(ceil_lo, floor_hi + 1);
   }
 }
 
@@ -132,14 +131,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   std::array<int, kParts> order;
   for (int p = 0; p < kParts; ++p) order[p] = p;
   std::sort(order.begin(), order.end(), [&](int a, int b) { return outlines[a].depth_m < outlines[b].depth_m; });
-  int top = 1 << 30, bottom = -(1 << 30);
-  for (int p = 0; p < kParts; ++p) {
-    rasterize(outlines[p], spans[p]);
-    if (spans[p].rows > 0) {
-      top = std::min(top, spans[p].first_row);
-      bottom = std::max(bottom, spans[p].first_row + spans[p].rows);
-    }
-  }
+  for (int p = 0; p < kParts; ++p) rasterize(outlines[p], spans[p]);
   // The image motion each part predicts: the similarity that takes its axis now to its axis in
   // the previous frame maps a point now to where it was.
   const bool flow = evidence.hasFlow() && previous != nullptr;
@@ -164,36 +156,45 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   const int step = flow ? evidence.flow().step() : 1;
   const int roi_right = roi.x + roi.width, roi_bottom = roi.y + roi.height;
   const float flow_limit = static_cast<float>(options.flow_ratio_limit);
-  std::array<Interval, kParts> covered;
   std::array<Interval, kParts + 1> pieces, next;
-  for (int y = top; y < bottom; ++y) {
-    int n_covered = 0;
-    const bool row_inside = y >= roi.y && y < roi_bottom;
-    const bool flow_row = flow && row_inside && y % step == 0;
-    for (int p : order) {
-      const RowSpans& s = spans[p];
-      const int k = y - s.first_row;
-      if (k < 0 || k >= s.rows || s.left[k] >= s.right[k]) continue;
-      const Interval span{s.left[k], s.right[k]};
-      // The span less the nearer parts' spans on this row.
+  // Each part over its own rows, less the spans there of the nearer parts whose rows reach them.
+  for (int depth_rank = 0; depth_rank < kParts; ++depth_rank) {
+    const int p = order[depth_rank];
+    const RowSpans& s = spans[p];
+    if (s.rows == 0) continue;
+    const int last_row = s.first_row + s.rows;
+    std::array<const RowSpans*, kParts> occluders;
+    int n_occluders = 0;
+    for (int nearer = 0; nearer < depth_rank; ++nearer) {
+      const RowSpans& o = spans[order[nearer]];
+      if (o.rows > 0 && o.first_row < last_row && o.first_row + o.rows > s.first_row) occluders[n_occluders++] = &o;
+    }
+    const PartKind kind = partKind(static_cast<body::BodyPart>(p));
+    for (int k = 0; k < s.rows; ++k) {
+      if (s.left[k] >= s.right[k]) continue;
+      const int y = s.first_row + k;
       int n_pieces = 1;
-      pieces[0] = span;
-      for (int c = 0; c < n_covered && n_pieces > 0; ++c) {
+      pieces[0] = Interval{s.left[k], s.right[k]};
+      for (int c = 0; c < n_occluders && n_pieces > 0; ++c) {
+        const RowSpans& o = *occluders[c];
+        const int ko = y - o.first_row;
+        if (ko < 0 || ko >= o.rows || o.left[ko] >= o.right[ko]) continue;
+        const Interval cover{o.left[ko], o.right[ko]};
         int n_next = 0;
         for (int i = 0; i < n_pieces; ++i) {
           const Interval& piece = pieces[i];
-          if (covered[c].end <= piece.begin || covered[c].begin >= piece.end) {
+          if (cover.end <= piece.begin || cover.begin >= piece.end) {
             next[n_next++] = piece;
             continue;
           }
-          if (piece.begin < covered[c].begin && n_next < kParts + 1) next[n_next++] = {piece.begin, covered[c].begin};
-          if (covered[c].end < piece.end && n_next < kParts + 1) next[n_next++] = {covered[c].end, piece.end};
+          if (piece.begin < cover.begin && n_next < kParts + 1) next[n_next++] = {piece.begin, cover.begin};
+          if (cover.end < piece.end && n_next < kParts + 1) next[n_next++] = {cover.end, piece.end};
         }
         std::copy(next.begin(), next.begin() + n_next, pieces.begin());
         n_pieces = n_next;
       }
-      covered[n_covered++] = span;
-      const PartKind kind = partKind(static_cast<body::BodyPart>(p));
+      const bool row_inside = y >= roi.y && y < roi_bottom;
+      const bool flow_row = flow && has_motion[p] && row_inside && y % step == 0;
       for (int i = 0; i < n_pieces; ++i) {
         const int a = pieces[i].begin, b = pieces[i].end;
         const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
@@ -204,7 +205,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         } else {
           outside[p] += b - a;
         }
-        if (flow_row && has_motion[p] && ca < cb) {
+        if (flow_row && ca < cb) {
           const PartOutline& now = outlines[p];
           const PartImageAxis& before = (*previous)[p];
           for (int x = ((ca + step - 1) / step) * step; x < cb; x += step) {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <random>
 
 #include "rendered_walk.h"
 
@@ -182,6 +183,62 @@ TEST(Likelihood, ANearerPartHidesAFartherOne) {
     evaluateLikelihood(e, overlapping, nullptr, s.options, &scores);
     EXPECT_GT(scores[near].pixels, 50) << (left_nearer ? "left" : "right") << " thigh nearer";
     EXPECT_EQ(scores[far].pixels, 0) << (left_nearer ? "right" : "left") << " thigh behind it";
+  }
+}
+
+// rasterize() against the definition: a pixel belongs to an outline when its centre (integer
+// coordinates) lies inside or on it. Random convex outlines in any position and orientation,
+// and ones with vertices and level edges exactly on pixel rows.
+TEST(Rasterize, CoversExactlyThePixelCentresInsideTheOutline) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-20.0, 60.0);
+  auto check = [](const std::vector<cv::Point2f>& corners, const std::string& name) {
+    std::vector<cv::Point2f> hull;  // cv::convexHull takes float points
+    cv::convexHull(corners, hull);
+    PartOutline outline;
+    outline.visible = true;
+    outline.size = static_cast<int>(hull.size());
+    for (int i = 0; i < outline.size; ++i) outline.hull[i] = {hull[i].x, hull[i].y};
+    RowSpans spans;
+    rasterize(outline, spans);
+    int inside = 0, wrong = 0;
+    for (int y = -40; y < 80; ++y)
+      for (int x = -40; x < 80; ++x) {
+        const int k = y - spans.first_row;
+        const bool in_spans = k >= 0 && k < spans.rows && x >= spans.left[k] && x < spans.right[k];
+        const double distance = cv::pointPolygonTest(hull, cv::Point2f(x, y), true);
+        if (std::abs(distance) < 1e-4) continue;  // on the outline (to float precision): either way
+        inside += distance > 0;
+        if (in_spans != (distance > 0) && wrong++ == 0)
+          ADD_FAILURE() << name << ": pixel (" << x << ", " << y << ") " << (in_spans ? "in" : "not in")
+                        << " the spans, distance " << distance;
+      }
+    EXPECT_EQ(wrong, 0) << name;
+    return inside;
+  };
+  int covered = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<cv::Point2f> corners(3 + trial % 14);
+    for (auto& c : corners) c = cv::Point2d(coordinate(random), coordinate(random));
+    covered += check(corners, "random outline " + std::to_string(trial));
+  }
+  EXPECT_GT(covered, 100000);
+  // Pixels strictly inside: 9 × 5 for the square; 8, 6, 4, 4 and 2 on rows 4 to 8 for the triangle.
+  EXPECT_EQ(check({{2, 3}, {12, 3}, {12, 9}, {2, 9}}, "square on pixel rows"), 45);
+  EXPECT_EQ(check({{2.5, 3}, {12.5, 3}, {7.5, 9}}, "triangle with a level top edge"), 24);
+  check({{0, 0}, {10.5, 4}, {3, 11}, {-6.5, 4}}, "diamond with vertices on rows");
+  // Pixels on the outline are its own: the square's spans are rows 3 to 9, columns 2 to 12.
+  PartOutline square;
+  square.visible = true;
+  square.size = 4;
+  square.hull[0] = {2, 3}, square.hull[1] = {2, 9}, square.hull[2] = {12, 9}, square.hull[3] = {12, 3};
+  RowSpans spans;
+  rasterize(square, spans);
+  EXPECT_EQ(spans.first_row, 3);
+  ASSERT_EQ(spans.rows, 7);
+  for (int k = 0; k < spans.rows; ++k) {
+    EXPECT_EQ(spans.left[k], 2) << "row " << 3 + k;
+    EXPECT_EQ(spans.right[k], 13) << "row " << 3 + k;
   }
 }
 

@@ -36,7 +36,25 @@ class Camera {
   // Pixel of a world point (metres), distortion applied; nullopt behind the camera (z ≤ 1 cm).
   // Written out rather than calling cv::projectPoints: it is called per body part per
   // particle, and agrees with cv::projectPoints to 1e-6 px (test_camera).
-  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& world_m) const;
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& world_m) const {
+    return projectFromCamera(toCamera(world_m));
+  }
+  // The same in two halves, inline for the per-particle path: a world point (or, with
+  // toCameraDirection, a direction) in the camera frame, then the pixel of a camera-frame point.
+  Eigen::Vector3d toCamera(const Eigen::Vector3d& world_m) const { return rotation_ * world_m + translation_; }
+  Eigen::Vector3d toCameraDirection(const Eigen::Vector3d& world) const { return rotation_ * world; }
+  std::optional<Eigen::Vector2d> projectFromCamera(const Eigen::Vector3d& c) const {
+    if (c.z() <= kMinimumDepthM) return std::nullopt;
+    // OpenCV's distortion model (cv::projectPoints without thin prism or tilt).
+    const double x = c.x() / c.z(), y = c.y() / c.z();
+    const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+    double radial = 1 + k1_ * r2 + k2_ * r4 + k3_ * r6;
+    if (rational_) radial /= 1 + k4_ * r2 + k5_ * r4 + k6_ * r6;
+    const double xd = x * radial + 2 * p1_ * x * y + p2_ * (r2 + 2 * x * x);
+    const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
+    return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
+  }
+  static constexpr double kMinimumDepthM = 0.01;
 
   // Depth of a world point along the optical axis (camera z), metres.
   double depth(const Eigen::Vector3d& world_m) const { return rotation_.row(2).dot(world_m) + translation_.z(); }
@@ -63,6 +81,7 @@ class Camera {
   Eigen::Matrix3d k_;
   std::vector<double> distortion_;
   double k1_ = 0, k2_ = 0, p1_ = 0, p2_ = 0, k3_ = 0, k4_ = 0, k5_ = 0, k6_ = 0;
+  bool rational_ = false;  // k4..k6 given: the radial factor has a denominator
   Eigen::Matrix3d rotation_;
   Eigen::Vector3d translation_;
   int width_, height_;

@@ -95,6 +95,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
 struct RowSpans {
   int first_row = 0, rows = 0;
   std::vector<int> left, right;
+  std::array<std::vector<double>, 2> chain_x;  // scratch: the outline's x on each row, per chain
 };
 void rasterize(const PartOutline& outline, RowSpans& spans);
 
