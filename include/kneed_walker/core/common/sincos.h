@@ -17,7 +17,12 @@ inline void sinCos(double x, double& sin_x, double& cos_x) {
   constexpr double kTwoOverPi = 6.36619772367581382433e-01;
   constexpr double kPiOver2Hi = 1.57079632673412561417e+00;  // first 33 bits of π/2
   constexpr double kPiOver2Lo = 6.07710050650619224932e-11;  // π/2 − kPiOver2Hi
-  const double k = std::nearbyint(x * kTwoOverPi);
+  // k = nearbyint(x · 2/π) by the 1.5·2⁵² trick: adding it leaves no fraction bits, so the
+  // sum is rounded to the nearest integer (ties to even, the default mode, as nearbyint),
+  // exactly, for |x · 2/π| < 2⁵¹. Without SSE4.1's roundsd, std::nearbyint is a call into
+  // libm, five per evaluation of the equations of motion.
+  constexpr double kRoundingShift = 6755399441055744.0;  // 1.5 · 2⁵²
+  const double k = (x * kTwoOverPi + kRoundingShift) - kRoundingShift;
   const double r = (x - k * kPiOver2Hi) - k * kPiOver2Lo;  // |r| ≤ π/4
   const double z = r * r;
   const double s = r + r * z * (-1.66666666666666324348e-01 +
