@@ -15,8 +15,6 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("the likelihood needs BGR 8-bit frames");
   if (bgr.size() != background.size())
     throw std::invalid_argument("the frame's size differs from the background model's");
-  if (options.row_step < 1 || (options.use_flow && options.flow.grid_step_px % options.row_step != 0))
-    throw std::invalid_argument("the likelihood's row_step must be at least 1 and divide the flow grid step");
   roi_ = roi & cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi_.empty()) roi_ = cv::Rect(0, 0, 1, 1);
   // Measurements of the region only, with a margin so that its gradients are the whole image's.
@@ -50,22 +48,8 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   }
 }
 
-namespace {
-
-// The smallest multiple of `step` at or above y, and the largest at or below it (any sign).
-int multipleAtOrAbove(int y, int step) { return y >= 0 ? (y + step - 1) / step * step : -(-y / step * step); }
-int multipleAtOrBelow(int y, int step) { return -multipleAtOrAbove(-y, step); }
-
-struct Interval {
-  int begin, end;
-};
-
-}  // namespace
-
-void rasterize(const PartOutline& outline, RowSpans& spans, int row_step) {
+void rasterize(const PartOutline& outline, RowSpans& spans) {
   spans.rows = 0;
-  spans.row_step = row_step;
-  if (row_step < 1) throw std::invalid_argument("rasterize: row_step must be at least 1");
   if (!outline.visible || outline.size < 3) return;
   double y_min = outline.hull[0].y(), y_max = y_min;
   for (int i = 1; i < outline.size; ++i) {
@@ -74,10 +58,12 @@ void rasterize(const PartOutline& outline, RowSpans& spans, int row_step) {
   }
   // Pixel centres at integer coordinates; guard against absurd outlines (far off the image).
   if (!(y_max - y_min < 1e5) || std::abs(y_min) > 1e6) return;
-  spans.first_row = multipleAtOrAbove(static_cast<int>(std::ceil(y_min)), row_step);
-  const int last_row = multipleAtOrBelow(static_cast<int>(std::floor(y_max)), row_step);
-  if (last_row < spans.first_row) return;
-  spans.rows = (last_row - spans.first_row) / row_step + 1;
+  spans.first_row = static_cast<int>(std::ceil(y_min));
+  spans.rows = static_cast<int>(std::floor(y_max)) - spans.first_row + 1;
+  if (spans.rows <= 0) {
+    spans.rows = 0;
+    return;
+  }
   if (static_cast<int>(spans.left.size()) < spans.rows) {
     spans.left.resize(spans.rows);
     spans.right.resize(spans.rows);
@@ -90,19 +76,17 @@ void rasterize(const PartOutline& outline, RowSpans& spans, int row_step) {
   for (int i = 0; i < outline.size; ++i) {
     const Eigen::Vector2d& p = outline.hull[i];
     const Eigen::Vector2d& q = outline.hull[(i + 1) % outline.size];
-    const int r0 = std::max(multipleAtOrAbove(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), row_step),
-                            spans.first_row);
-    const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), last_row);
+    const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
+    const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
     if (r0 > r1) continue;
-    const int k0 = (r0 - spans.first_row) / row_step;
+    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data() - spans.first_row;
     if (p.y() == q.y()) {  // a level edge on a pixel row: its ends are the chains' ends there
-      spans.chain_x[0][k0] = p.x();
-      spans.chain_x[1][k0] = q.x();
+      spans.chain_x[0][r0 - spans.first_row] = p.x();
+      spans.chain_x[1][r0 - spans.first_row] = q.x();
       continue;
     }
-    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data();
     const double slope = (q.x() - p.x()) / (q.y() - p.y());
-    for (int r = r0, k = k0; r <= r1; r += row_step, ++k) chain[k] = p.x() + (r - p.y()) * slope;
+    for (int r = r0; r <= r1; ++r) chain[r] = p.x() + (r - p.y()) * slope;
   }
   // ceil and floor by truncation and a correction (exact; the compiler vectorises it, where
   // std::ceil without SSE4.1 is a branchy sequence per row).
@@ -119,6 +103,14 @@ void rasterize(const PartOutline& outline, RowSpans& spans, int row_step) {
     right[k] = std::max(ceil_lo, floor_hi + 1);
   }
 }
+
+namespace {
+
+struct Interval {
+  int begin, end;
+};
+
+}  // namespace
 
 BodyImageAxes imageAxes(const BodyOutlines& outlines) {
   BodyImageAxes axes;
@@ -139,8 +131,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   std::array<int, kParts> order;
   for (int p = 0; p < kParts; ++p) order[p] = p;
   std::sort(order.begin(), order.end(), [&](int a, int b) { return outlines[a].depth_m < outlines[b].depth_m; });
-  const int row_step = options.row_step;
-  for (int p = 0; p < kParts; ++p) rasterize(outlines[p], spans[p], row_step);
+  for (int p = 0; p < kParts; ++p) rasterize(outlines[p], spans[p]);
   // The image motion each part predicts: the similarity that takes its axis now to its axis in
   // the previous frame maps a point now to where it was.
   const bool flow = evidence.hasFlow() && previous != nullptr;
@@ -171,26 +162,23 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     const int p = order[depth_rank];
     const RowSpans& s = spans[p];
     if (s.rows == 0) continue;
-    // Rows are the multiples of row_step in every part's spans, so row k of one part is row
-    // k + (first_row difference) / row_step of another.
-    const int last_row = s.first_row + (s.rows - 1) * row_step;
+    const int last_row = s.first_row + s.rows;
     std::array<const RowSpans*, kParts> occluders;
     int n_occluders = 0;
     for (int nearer = 0; nearer < depth_rank; ++nearer) {
       const RowSpans& o = spans[order[nearer]];
-      if (o.rows > 0 && o.first_row <= last_row && o.first_row + (o.rows - 1) * row_step >= s.first_row)
-        occluders[n_occluders++] = &o;
+      if (o.rows > 0 && o.first_row < last_row && o.first_row + o.rows > s.first_row) occluders[n_occluders++] = &o;
     }
     const PartKind kind = partKind(static_cast<body::BodyPart>(p));
     for (int k = 0; k < s.rows; ++k) {
       if (s.left[k] >= s.right[k]) continue;
-      const int y = s.first_row + k * row_step;
+      const int y = s.first_row + k;
       int n_pieces = 1;
       pieces[0] = Interval{s.left[k], s.right[k]};
       for (int c = 0; c < n_occluders && n_pieces > 0; ++c) {
         const RowSpans& o = *occluders[c];
-        const int ko = (y - o.first_row) / row_step;
-        if (y < o.first_row || ko >= o.rows || o.left[ko] >= o.right[ko]) continue;
+        const int ko = y - o.first_row;
+        if (ko < 0 || ko >= o.rows || o.left[ko] >= o.right[ko]) continue;
         const Interval cover{o.left[ko], o.right[ko]};
         int n_next = 0;
         for (int i = 0; i < n_pieces; ++i) {
@@ -238,12 +226,12 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   }
   double total = 0;
   for (int p = 0; p < kParts; ++p) {
-    const int pixels = (inside[p] + outside[p]) * row_step;  // the sampled rows stand for row_step rows each
+    const int pixels = inside[p] + outside[p];
     PartScore score;
     score.pixels = pixels;
     score.flow_points = flow_count[p];
     if (pixels >= options.min_part_pixels) {
-      score.appearance = (appearance_sum[p] + options.outside_ratio * outside[p]) / (inside[p] + outside[p]);
+      score.appearance = (appearance_sum[p] + options.outside_ratio * outside[p]) / pixels;
       total += options.appearance_weight * score.appearance;
     }
     if (flow_count[p] > 0) {

@@ -33,10 +33,6 @@ struct LikelihoodOptions {
   double flow_ratio_limit = 4.0;
   double outside_ratio = -3.0;  // the log ratio a part's pixel scores outside the evidence's region or image
   int min_part_pixels = 6;      // a part with fewer visible pixels is left out (hidden)
-  // The appearance term reads the image rows that are multiples of this (the flow grid's rows
-  // among them: it must divide flow.grid_step_px). Neighbouring rows of a part say nearly the
-  // same; reading every other one halves the per-particle work of rasterising and summing.
-  int row_step = 2;
   // Weights of each part's appearance and flow averages. The paper sums the averages with
   // weight 1; measured on the four synthetic sequences (2000 particles, 3 seeds; README
   // "The tracker"), weight 1 collapses N_eff to a few particles every frame and loses the person
@@ -74,8 +70,7 @@ class FrameEvidence {
 struct PartScore {
   double appearance = 0;  // average log ratio over the part's pixels (outside ones at outside_ratio)
   double flow = 0;        // average flow log ratio over its visible grid points
-  int pixels = 0;         // visible pixels (inside and outside the evidence's region; counted on
-                          // the sampled rows, each standing for row_step rows)
+  int pixels = 0;         // visible pixels (inside and outside the evidence's region)
   int flow_points = 0;
 };
 using PartScores = std::array<PartScore, body::kNumBodyParts>;
@@ -95,14 +90,13 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
                           const BodyImageAxes* previous, const LikelihoodOptions& options,
                           PartScores* scores = nullptr);
 
-// The pixels inside a convex outline (their centres inside or on it), on the image rows that
-// are multiples of row_step: row i is y = first_row + i · row_step, its columns
-// [left[i], right[i]). Used by evaluateLikelihood and to sample appearance pixels.
+// The pixels inside a convex outline: per image row y in [first_row, first_row + rows), the
+// columns [left[i], right[i]). Used by evaluateLikelihood and to sample appearance pixels.
 struct RowSpans {
-  int first_row = 0, rows = 0, row_step = 1;
+  int first_row = 0, rows = 0;
   std::vector<int> left, right;
   std::array<std::vector<double>, 2> chain_x;  // scratch: the outline's x on each row, per chain
 };
-void rasterize(const PartOutline& outline, RowSpans& spans, int row_step = 1);
+void rasterize(const PartOutline& outline, RowSpans& spans);
 
 }  // namespace kneed_walker::core::vision
