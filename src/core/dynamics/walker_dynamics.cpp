@@ -198,11 +198,9 @@ InertiaCoefficients inertiaCoefficients(const KinematicMap& map) {
   return k;
 }
 
-void equationsOfMotion(const InertiaCoefficients& k, double gravity, double ground_slope,
-                       const Vector5& q, const Vector5& qdot, const Vector5& applied_force,
-                       EquationsOfMotion& out) {
+void equationsOfMotion(const InertiaCoefficients& k, const Point& g_vec, const Vector5& q,
+                       const Vector5& qdot, const Vector5& applied_force, EquationsOfMotion& out) {
   const auto e = phasors(q);
-  const Point g_vec = gravity * Point(-std::sin(ground_slope), -std::cos(ground_slope));
   const int roll = k.rolling_coordinate;
   const double r = k.foot_radius;
   Matrix5& m = out.mass;

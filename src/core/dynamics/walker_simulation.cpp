@@ -77,13 +77,13 @@ WalkerSimulator::WalkerSimulator(const WalkerModel& model, const SimulationOptio
   natural_time_ = std::sqrt(model.legLength() / model.gravity);
 }
 
-WalkerSimulator::Derivative WalkerSimulator::derivative(const WalkerControls& controls,
+WalkerSimulator::Derivative WalkerSimulator::derivative(const WalkerControls& controls, const Point& gravity,
                                                         const Vector5& q, const Vector5& qdot,
                                                         const KneeFlags& on_limit) const {
   const JointTorques torques = jointTorques(controls, q, qdot);
   const Vector5 applied = generalisedForce(torques);
   EquationsOfMotion eom;
-  equationsOfMotion(inertia_, model_.gravity, controls.ground_slope, q, qdot, applied, eom);
+  equationsOfMotion(inertia_, gravity, q, qdot, applied, eom);
   Derivative d;
   d.qdot = qdot;
   d.qddot = constrainedAcceleration(eom, on_limit);  // eqs. 4, 7, 8
@@ -95,12 +95,13 @@ WalkerSimulator::Derivative WalkerSimulator::derivative(const WalkerControls& co
 void WalkerSimulator::rk4(const WalkerControls& controls, const WalkerState& from, double h,
                           WalkerState& to, TorqueIntegrals* integrals) const {
   const KneeFlags& lim = from.knee_on_limit;
-  const Derivative k1 = derivative(controls, from.q, from.qdot, lim);
+  const Point g = slopeGravity(model_.gravity, controls.ground_slope);  // once for the four stages
+  const Derivative k1 = derivative(controls, g, from.q, from.qdot, lim);
   const Derivative k2 =
-      derivative(controls, from.q + 0.5 * h * k1.qdot, from.qdot + 0.5 * h * k1.qddot, lim);
+      derivative(controls, g, from.q + 0.5 * h * k1.qdot, from.qdot + 0.5 * h * k1.qddot, lim);
   const Derivative k3 =
-      derivative(controls, from.q + 0.5 * h * k2.qdot, from.qdot + 0.5 * h * k2.qddot, lim);
-  const Derivative k4 = derivative(controls, from.q + h * k3.qdot, from.qdot + h * k3.qddot, lim);
+      derivative(controls, g, from.q + 0.5 * h * k2.qdot, from.qdot + 0.5 * h * k2.qddot, lim);
+  const Derivative k4 = derivative(controls, g, from.q + h * k3.qdot, from.qdot + h * k3.qddot, lim);
   to = from;
   to.q = from.q + (h / 6) * (k1.qdot + 2 * k2.qdot + 2 * k3.qdot + k4.qdot);
   to.qdot = from.qdot + (h / 6) * (k1.qddot + 2 * k2.qddot + 2 * k3.qddot + k4.qddot);
@@ -117,7 +118,7 @@ void WalkerSimulator::applyKneeLimit(WalkerState& state, int knee) const {
   // Eq. 6, then the least-squares projection onto the boundary.
   state.knee_on_limit[knee] = true;
   EquationsOfMotion eom;
-  equationsOfMotion(inertia_, model_.gravity, 0.0, state.q, state.qdot, Vector5::Zero(), eom);
+  equationsOfMotion(inertia_, slopeGravity(model_.gravity, 0.0), state.q, state.qdot, Vector5::Zero(), eom);
   state.qdot = projectKneeVelocity(eom.mass, state.qdot, state.knee_on_limit,
                                    options_.knee_sticking_rate / natural_time_);
   state.q = projectKneePosition(eom.mass, state.q, state.knee_on_limit);

@@ -34,7 +34,7 @@ const WalkerModel kPerson = scaleToPerson(BodyProportions{}, 1.75, 70);
 EquationsOfMotion eomAt(const KinematicMap& map, double slope, const Vector5& q,
                         const Vector5& qdot) {
   EquationsOfMotion eom;
-  equationsOfMotion(inertiaCoefficients(map), kPerson.gravity, slope, q, qdot, Vector5::Zero(),
+  equationsOfMotion(inertiaCoefficients(map), slopeGravity(kPerson.gravity, slope), q, qdot, Vector5::Zero(),
                     eom);
   return eom;
 }
@@ -336,7 +336,7 @@ TEST(WalkerDynamics, VirtualTorquesHoldOnlyKneesThatWouldHyperextend) {
     EquationsOfMotion eom;
     JointTorques t{};
     t[kStanceKnee] = push;  // positive flexes the knee, negative hyperextends it
-    equationsOfMotion(inertiaCoefficients(map), kPerson.gravity, 0, q, still, generalisedForce(t),
+    equationsOfMotion(inertiaCoefficients(map), slopeGravity(kPerson.gravity, 0), q, still, generalisedForce(t),
                       eom);
     KneeFlags active;
     const Vector5 acc = constrainedAcceleration(eom, {true, false}, &active);

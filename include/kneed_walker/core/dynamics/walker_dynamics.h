@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 
 #include "kneed_walker/core/dynamics/walker_kinematics.h"
 
@@ -81,9 +82,14 @@ struct EquationsOfMotion {
   Matrix5 mass;   // M(q), symmetric positive definite
   Vector5 force;  // F(q, q̇, θ, γ)
 };
-void equationsOfMotion(const InertiaCoefficients& inertia, double gravity, double ground_slope,
-                       const Vector5& q, const Vector5& qdot, const Vector5& applied_force,
-                       EquationsOfMotion& out);
+// `gravity` is slopeGravity(g, γ): computed once per step by the caller, not per evaluation.
+void equationsOfMotion(const InertiaCoefficients& inertia, const Point& gravity, const Vector5& q,
+                       const Vector5& qdot, const Vector5& applied_force, EquationsOfMotion& out);
+// Gravity's acceleration in the slope frame (x down the walking direction along the slope, y
+// along its normal) on a slope γ (positive uphill): g (−sin γ, −cos γ).
+inline Point slopeGravity(double gravity, double ground_slope) {
+  return gravity * Point(-std::sin(ground_slope), -std::cos(ground_slope));
+}
 
 // Knee joint limits a_jᵀ q ≤ b_j (paper §3.2), written here as flexion_j ≥ 0 with flexion
 // rows a_j = e_thigh − e_shank: index 0 the stance knee, 1 the swing knee.

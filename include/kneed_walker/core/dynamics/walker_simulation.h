@@ -119,7 +119,7 @@ class WalkerSimulator {
 
  private:
   struct Derivative;
-  Derivative derivative(const WalkerControls& controls, const Vector5& q, const Vector5& qdot,
+  Derivative derivative(const WalkerControls& controls, const Point& gravity, const Vector5& q, const Vector5& qdot,
                         const KneeFlags& on_limit) const;
   void rk4(const WalkerControls& controls, const WalkerState& from, double h, WalkerState& to,
            TorqueIntegrals* integrals) const;
