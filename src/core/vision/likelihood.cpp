@@ -79,14 +79,14 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
     const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
     const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
     if (r0 > r1) continue;
-    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data() - spans.first_row;
+    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data();  // row r at chain[r - first_row]
     if (p.y() == q.y()) {  // a level edge on a pixel row: its ends are the chains' ends there
       spans.chain_x[0][r0 - spans.first_row] = p.x();
       spans.chain_x[1][r0 - spans.first_row] = q.x();
       continue;
     }
     const double slope = (q.x() - p.x()) / (q.y() - p.y());
-    for (int r = r0; r <= r1; ++r) chain[r] = p.x() + (r - p.y()) * slope;
+    for (int r = r0; r <= r1; ++r) chain[r - spans.first_row] = p.x() + (r - p.y()) * slope;
   }
   // ceil and floor by truncation and a correction (exact; the compiler vectorises it, where
   // std::ceil without SSE4.1 is a branchy sequence per row).

@@ -54,7 +54,6 @@ class Camera {
     const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
     return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
   }
-  static constexpr double kMinimumDepthM = 0.01;
 
   // Depth of a world point along the optical axis (camera z), metres.
   double depth(const Eigen::Vector3d& world_m) const { return rotation_.row(2).dot(world_m) + translation_.z(); }
@@ -78,6 +77,7 @@ class Camera {
   int height() const { return height_; }
 
  private:
+  static constexpr double kMinimumDepthM = 0.01;  // nearer than this along z is behind the camera
   Eigen::Matrix3d k_;
   std::vector<double> distortion_;
   double k1_ = 0, k2_ = 0, p1_ = 0, p2_ = 0, k3_ = 0, k4_ = 0, k5_ = 0, k6_ = 0;
