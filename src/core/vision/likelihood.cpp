@@ -79,12 +79,12 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
     const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
     const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
     if (r0 > r1) continue;
-    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data();  // row r at chain[r - first_row]
     if (p.y() == q.y()) {  // a level edge on a pixel row: its ends are the chains' ends there
       spans.chain_x[0][r0 - spans.first_row] = p.x();
       spans.chain_x[1][r0 - spans.first_row] = q.x();
       continue;
     }
+    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data();  // row r at chain[r - first_row]
     const double slope = (q.x() - p.x()) / (q.y() - p.y());
     for (int r = r0; r <= r1; ++r) chain[r - spans.first_row] = p.x() + (r - p.y()) * slope;
   }
@@ -162,12 +162,12 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     const int p = order[depth_rank];
     const RowSpans& s = spans[p];
     if (s.rows == 0) continue;
-    const int last_row = s.first_row + s.rows;
+    const int end_row = s.first_row + s.rows;  // one past the part's last row
     std::array<const RowSpans*, kParts> occluders;
     int n_occluders = 0;
     for (int nearer = 0; nearer < depth_rank; ++nearer) {
       const RowSpans& o = spans[order[nearer]];
-      if (o.rows > 0 && o.first_row < last_row && o.first_row + o.rows > s.first_row) occluders[n_occluders++] = &o;
+      if (o.rows > 0 && o.first_row < end_row && o.first_row + o.rows > s.first_row) occluders[n_occluders++] = &o;
     }
     const PartKind kind = partKind(static_cast<body::BodyPart>(p));
     for (int k = 0; k < s.rows; ++k) {
