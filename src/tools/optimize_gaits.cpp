@@ -107,8 +107,8 @@ int run(int argc, char** argv) {
   app.add_option("--max-attempts", max_attempts, "warm starts tried per point")->check(CLI::Range(1, 26));
   bool prior_fixed = false;
   app.add_flag("--prior-fixed", prior_fixed,
-               "hold the prior's fixed controls (knee and torso damping, swing knee stiffness, torso "
-               "rest angle; paper 3.4) instead of optimising them: the prior's table");
+               "hold the prior's fixed controls (knee and torso damping, torso rest angle; paper 3.4) "
+               "instead of optimising them: the prior's table");
   std::string seed_table, merge_table;
   app.add_option("--merge", merge_table,
                  "fold this table's gaits into --out where they have the lower effort, then exit "

@@ -23,8 +23,8 @@ double& field(dynamics::WalkerControls& c, int control) {
 }  // namespace
 
 bool FixedControls::operator==(const FixedControls& o) const {
-  return knee_damping == o.knee_damping && swing_knee_stiffness == o.swing_knee_stiffness &&
-         torso_rest_per_slope == o.torso_rest_per_slope && torso_damping == o.torso_damping;
+  return knee_damping == o.knee_damping && torso_rest_per_slope == o.torso_rest_per_slope &&
+         torso_damping == o.torso_damping;
 }
 
 const char* controlName(Control control) {
@@ -54,7 +54,6 @@ bool isFixed(Control control) {
   switch (control) {
     case kStanceKneeDamping:
     case kSwingKneeDamping:
-    case kSwingKneeStiffness:
     case kSwingKneeRestAngle:
     case kTorsoRestAngle:
     case kTorsoDamping:
@@ -67,7 +66,6 @@ bool isFixed(Control control) {
 dynamics::WalkerControls withFixedControls(dynamics::WalkerControls c, const FixedControls& fixed) {
   c.springs.stance_knee_damping = fixed.knee_damping;
   c.springs.swing_knee_damping = fixed.knee_damping;
-  c.springs.swing_knee_stiffness = fixed.swing_knee_stiffness;
   c.springs.swing_knee_rest_angle = 0.0;
   c.springs.torso_rest_angle = fixed.torso_rest_per_slope * c.ground_slope;
   c.springs.torso_damping = fixed.torso_damping;

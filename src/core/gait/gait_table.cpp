@@ -96,10 +96,10 @@ void saveGaitTable(const std::string& path, const GaitTable& table) {
        << g.slopes_rad;
   if (table.fixed) {
     file.writeComment("Held fixed while optimising (the prior's values, paper 3.4): knee damping,\n"
-                      "swing knee stiffness, torso rest angle per slope, torso damping.");
+                      "torso rest angle per slope, torso damping.");
     file << "fixed_controls"
-         << std::vector<double>{table.fixed->knee_damping, table.fixed->swing_knee_stiffness,
-                                table.fixed->torso_rest_per_slope, table.fixed->torso_damping};
+         << std::vector<double>{table.fixed->knee_damping, table.fixed->torso_rest_per_slope,
+                                table.fixed->torso_damping};
   }
   file << "gaits" << "[";
   for (size_t i = 0; i < table.entries.size(); ++i) {
@@ -139,8 +139,8 @@ GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions
   requireAscending(file, "speeds_kmh", g.speeds_kmh);
   requireAscending(file, "step_lengths_m", g.step_lengths_m);
   requireAscending(file, "slopes_rad", g.slopes_rad);
-  std::array<double, 4> fixed;
-  if (file.read("fixed_controls", fixed)) table.fixed = FixedControls{fixed[0], fixed[1], fixed[2], fixed[3]};
+  std::array<double, 3> fixed;
+  if (file.read("fixed_controls", fixed)) table.fixed = FixedControls{fixed[0], fixed[1], fixed[2]};
 
   std::vector<common::ConfigNode> gaits = file.maps("gaits", common::Need::kRequired);
   if (static_cast<int>(gaits.size()) != g.size())

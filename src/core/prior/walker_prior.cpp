@@ -15,7 +15,6 @@ std::vector<std::string> validate(const PriorOptions& o) {
     if (!(std::isfinite(v) && v >= 0)) problems.push_back(name + " = " + std::to_string(v) + " must be >= 0");
   };
   nonNegative("knee_damping", o.fixed.knee_damping);
-  nonNegative("swing_knee_stiffness", o.fixed.swing_knee_stiffness);
   nonNegative("torso_damping", o.fixed.torso_damping);
   nonNegative("impulse_scale", o.impulse_scale);
   if (!(o.noise_innovation_limit > 0)) problems.push_back("noise_innovation_limit must be > 0");
@@ -46,7 +45,6 @@ PriorOptions loadPriorOptions(const std::string& path) {
   common::ConfigFile file(path, "prior parameters");
   PriorOptions o;
   file.read("knee_damping", o.fixed.knee_damping);
-  file.read("swing_knee_stiffness", o.fixed.swing_knee_stiffness);
   file.read("torso_rest_per_slope", o.fixed.torso_rest_per_slope);
   file.read("torso_damping", o.fixed.torso_damping);
   file.read("stride_mean_offset", o.stride_mean_offset);
@@ -81,8 +79,6 @@ void requirePriorTable(const gait::GaitTable& table, const PriorOptions& o) {
   std::ostringstream message;
   if (differs(f.knee_damping, p.knee_damping))
     message << "knee_damping " << p.knee_damping << " (table: " << f.knee_damping << ") ";
-  if (differs(f.swing_knee_stiffness, p.swing_knee_stiffness))
-    message << "swing_knee_stiffness " << p.swing_knee_stiffness << " (table: " << f.swing_knee_stiffness << ") ";
   if (differs(f.torso_rest_per_slope, p.torso_rest_per_slope))
     message << "torso_rest_per_slope " << p.torso_rest_per_slope << " (table: " << f.torso_rest_per_slope << ") ";
   if (differs(f.torso_damping, p.torso_damping))
@@ -139,7 +135,8 @@ WalkerParticle WalkerPrior::sample(double phase, common::Random& random, Start s
 
 dynamics::WalkerControls WalkerPrior::controls(const WalkerParticle& p) const {
   // The gait's own dampings, swing knee spring and torso rest angle (the fixed values for a
-  // table optimised with them held); the sampled stiffnesses and the noise of eq. 11.
+  // table optimised with them held, and its optimal swing knee stiffness); the sampled
+  // stiffnesses and the noise of eq. 11.
   dynamics::WalkerControls c = gait_.controls;
   c.ground_slope = gait_.target.slope;
   c.springs.stance_knee_stiffness = p.stiffness[kPriorStanceKnee];

@@ -57,11 +57,11 @@ TEST_P(ShippedGaitTable, CoversThePapersGridAndSlowWalks) {
             << papers.grid.size() << " on the paper's grid\n";
   RecordProperty("feasible_gaits", feasible);
   // The counts the README states for the shipped tables (a table regenerated with fewer gaits
-  // must say so there): on the paper's grid 263 free, 105 with the prior's fixed controls;
-  // on the whole grid 413 and 113 of 480 (since every landing must push, issue 13, and the
-  // prior's torso leans into the slope).
-  EXPECT_GE(papers_feasible, table.fixed ? 105 : 263);
-  EXPECT_GE(feasible, table.fixed ? 113 : 413);
+  // must say so there): on the paper's grid 263 free, 204 with the prior's fixed controls;
+  // on the whole grid 413 and 252 of 480. The prior's were 105 and 113 with the paper's swing
+  // knee stiffness of 0 (gait::FixedControls).
+  EXPECT_GE(papers_feasible, table.fixed ? 204 : 263);
+  EXPECT_GE(feasible, table.fixed ? 252 : 413);
 }
 
 // regridded carries a table's gaits to the points a new grid shares with it.
@@ -104,7 +104,7 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
       const dynamics::SpringParameters& springs = e.gait.controls.springs;
       EXPECT_EQ(springs.stance_knee_damping, table.fixed->knee_damping) << "gait " << i;
       EXPECT_EQ(springs.swing_knee_damping, table.fixed->knee_damping) << "gait " << i;
-      EXPECT_EQ(springs.swing_knee_stiffness, table.fixed->swing_knee_stiffness) << "gait " << i;
+      EXPECT_EQ(springs.swing_knee_rest_angle, 0.0) << "gait " << i;
       EXPECT_NEAR(springs.torso_rest_angle, table.fixed->torso_rest_per_slope * target.slope, 1e-15) << "gait " << i;
       EXPECT_EQ(springs.torso_damping, table.fixed->torso_damping) << "gait " << i;
     }
@@ -138,10 +138,10 @@ TEST_P(ShippedGaitTable, EveryGaitIsPeriodicAndOnTarget) {
   // the free table's 413 gaits pass the stance foot with the swing sole below the ground (median
   // -0.5 mm, lowest -1.1 cm of leg length), 97 of the prior's 99 (median -5.4 mm, lowest -1.8
   // cm); the prior's re-solved with the torso leaning into the slope, all 113 of 113 (lowest
-  // -1.65 cm; the free table's -1.21). No more, and no deeper; the clearance constraint is to
-  // bring them to 0.
+  // -1.65 cm; the free table's -1.21); with its swing knee stiffness optimised, all 252 of 252
+  // (lowest -1.65 cm). No more, and no deeper; the clearance constraint is to bring them to 0.
   const bool free_table = GetParam() == std::string("gait_table.yaml");
-  EXPECT_LE(through_ground, free_table ? 313 : 113);
+  EXPECT_LE(through_ground, free_table ? 313 : 252);
   EXPECT_GE(lowest_passing, free_table ? -0.0125 : -0.017);
 }
 

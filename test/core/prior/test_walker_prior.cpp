@@ -84,7 +84,7 @@ TEST(WalkerPrior, ControlsCarryTheGaitsOwnDampingsSwingKneeAndTorsoRest) {
   const dynamics::WalkerControls c = prior.controls(prior.sample(0.0, random));
   EXPECT_DOUBLE_EQ(c.springs.stance_knee_damping, 0.05);
   EXPECT_DOUBLE_EQ(c.springs.swing_knee_damping, 0.05);
-  EXPECT_DOUBLE_EQ(c.springs.swing_knee_stiffness, 0.0);
+  EXPECT_EQ(c.springs.swing_knee_stiffness, f.gait.controls.springs.swing_knee_stiffness);
   EXPECT_DOUBLE_EQ(c.springs.torso_damping, 1.5);
   EXPECT_DOUBLE_EQ(c.springs.torso_rest_angle, f.gait.target.slope / 3);
 

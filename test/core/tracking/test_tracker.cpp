@@ -57,14 +57,14 @@ double track(Tracker& tracker, std::vector<TrackEstimate>* estimates = nullptr) 
 
 // The particles walk the table's gaits from min_gait_speed_kmh and min_gait_step_m up: by
 // default the paper's grid, and with 1.5 km/h and 0.3 m also the shipped table's slow walks
-// (level: 1.5 km/h on 0.4 m, 2 km/h on 0.4-0.5 m, 2.5 km/h on 0.4-0.6 m, 3 km/h on 0.4 m: 7
-// gaits; the 0.3 m steps land on a pulling ground). A range with no gait is refused, naming it.
+// (level: 0.3 m steps at 2.5-6 km/h, 0.4 m at 1.5-7, 2 and 2.5 km/h on 0.5 m, 2.5 km/h on
+// 0.6 m: 23 gaits). A range with no gait is refused, naming it.
 TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
   const int papers = makeTracker(10, 1)->gaitCount();
   TrackerOptions slow;
   slow.min_gait_speed_kmh = 1.5;
   slow.min_gait_step_m = 0.3;
-  EXPECT_EQ(makeTracker(10, 1, 70.0, slow)->gaitCount(), papers + 7);
+  EXPECT_EQ(makeTracker(10, 1, 70.0, slow)->gaitCount(), papers + 23);
   TrackerOptions none;
   none.min_gait_speed_kmh = 19;
   try {

@@ -24,18 +24,26 @@ struct Gait {
   double stride_duration = 0;         // of the periodic stride, natural time units
 };
 
-// The controls that the prior holds fixed (paper §3.4): knee dampings dK1 = dK2, the swing
-// knee's stiffness κK2 (its rest angle is then irrelevant: held at 0), the torso's rest angle
-// φ⁰To = torso_rest_per_slope × γ and its damping dTo. Gaits optimised with them held are the
-// ones the prior can follow (config/prior_gait_table.yaml). The paper's φ⁰To = γ/3 is a lean of
-// γ/3 into the slope from the vertical ("a slight lean of the torso into the slope", its Fig. 5;
-// forward uphill, back downhill, §3.3); walker angles are measured from the slope's normal,
-// counter-clockwise (an upright torso is at −γ, a forward lean negative), so that is
-// φ⁰To = −γ − γ/3 = −4γ/3. Read as +γ/3 in the walker's frame, the torso leaned back
-// 4γ/3 = 5.7° from the vertical on a 4.3° climb (evaluate's torso_lean_deg on the uphill walk).
+// The controls that the prior holds fixed (paper §3.4): knee dampings dK1 = dK2, the torso's
+// rest angle φ⁰To = torso_rest_per_slope × γ and its damping dTo; the swing knee's rest angle is
+// held at 0 (straight). Gaits optimised with them held are the ones the prior can follow
+// (config/prior_gait_table.yaml).
+//
+// The paper also holds the swing knee's stiffness κK2 at 0. In our units that leaves the prior no
+// brisk walk: with κK2 = 0 the optimiser closes no level cycle at 5–7 km/h below 0.9 m steps
+// (105 of the paper's 270 grid points in all), and most free optima there stiffen the swing knee
+// (16 of 20 at 0.5–0.8 m: κK2 of 1.4–5 M g L/rad), which straightens the leg in time for a short,
+// quick step. So the prior's table optimises κK2 at each grid point (204 of the 270; the README
+// has the figures).
+//
+// The paper's φ⁰To = γ/3 is a lean of γ/3 into the slope from the vertical ("a slight lean of
+// the torso into the slope", its Fig. 5; forward uphill, back downhill, §3.3); walker angles
+// are measured from the slope's normal, counter-clockwise (an upright torso is at −γ, a forward
+// lean negative), so that is φ⁰To = −γ − γ/3 = −4γ/3. Read as +γ/3 in the walker's frame, the
+// torso leaned back 4γ/3 = 5.7° from the vertical on a 4.3° climb (evaluate's torso_lean_deg on
+// the uphill walk).
 struct FixedControls {
   double knee_damping = 0.05;
-  double swing_knee_stiffness = 0.0;
   double torso_rest_per_slope = -4.0 / 3;
   double torso_damping = 1.5;
   bool operator==(const FixedControls& other) const;

@@ -6,8 +6,10 @@
 //  * Per frame: κ_j(t) ~ N(κ̄_j, σ_j²); the torque noise of eq. 11, η_j(t) = α_j η_j(t−1) +
 //    s_j ε with ε Cauchy (truncated), on the knees, hip, torso and the stance leg against the ground.
 //  * The rest of θ as the gait has it. The prior's table is optimised with the paper's fixed
-//    values held (knee damping dK1 = dK2 = 0.05, κK2 = 0, torso rest angle φ⁰To = γ/3, torso
-//    damping dTo = 1.5), so its gaits carry them; a gait of another table carries its own.
+//    values held (knee damping dK1 = dK2 = 0.05, torso rest angle φ⁰To = γ/3, torso damping
+//    dTo = 1.5), so its gaits carry them; a gait of another table carries its own. The paper
+//    also holds the swing knee's stiffness κK2 at 0; ours is the gait's optimum (gait::FixedControls
+//    says why).
 //  * Then the walker is simulated deterministically over the frame.
 //
 // Units: the gait table's dimensionless ones (leg length 1, body mass 1, g = 1; time in
@@ -44,10 +46,10 @@ struct PlacementNoise {
 enum PriorStiffness : int { kPriorStanceKnee = 0, kPriorHip, kPriorTorso, kNumPriorStiffnesses };
 
 struct PriorOptions {
-  // The paper's fixed values: knee dampings, swing knee stiffness, torso rest angle per slope
-  // and torso damping (in the file as the flat keys knee_damping, swing_knee_stiffness,
-  // torso_rest_per_slope, torso_damping). The walkers take them from the gait; these say
-  // which values the gait table must have been optimised with (requirePriorTable).
+  // The paper's fixed values: knee dampings, torso rest angle per slope and torso damping (in
+  // the file as the flat keys knee_damping, torso_rest_per_slope, torso_damping). The walkers
+  // take them from the gait; these say which values the gait table must have been optimised
+  // with (requirePriorTable).
   gait::FixedControls fixed;
   // Per-stride means: N(gait value + stride_mean_offset, stride_sd²); per-frame values:
   // N(mean, frame_sd²). The paper raises the stance knee's and torso's means above the optimal
