@@ -1,5 +1,6 @@
 // make_synthetic: a synthetic walking sequence with ground truth, for testing the tracker.
-// A person walks by the stochastic prior (paper §3.4) around a table gait, or by measured
+// A person walks by the stochastic prior (paper §3.4) around a table gait (or, with --end-speed
+// and/or --end-step, around the gait of each stride's moment of a linear change), or by measured
 // joint-angle curves (--norms: the Schwartz 2008 gait norms, a motion the prior did not make;
 // synthetic/norm_walk.h), is rendered as the
 // tracker's body model over a real background (the median of a video from the same static
@@ -57,7 +58,8 @@ struct Settings {
   bool heading_given = false;
   double oblique_deg = 0;  // the default heading turned away from the camera by this
   std::string norms;       // drive the walk by these gait norms instead of the prior
-  double end_speed_kmh = 0;  // with norms: the speed at the end (0: the start speed)
+  double end_speed_kmh = 0;  // the speed at the end (0: the start speed)
+  double end_step_m = 0;     // by the prior: the step length at the end (0: the start's)
   double start_stamp_s = 1.7e9;
   kw::synthetic::SyntheticWalkOptions walk;
 };
@@ -139,6 +141,8 @@ double meanStepLength(const kw::synthetic::SyntheticWalk& walk) {
 int run(const Settings& s, std::vector<std::string>& outputs) {
   const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
   kw::synthetic::SyntheticWalkOptions options = s.walk;
+  if (s.end_speed_kmh > 0) options.end_speed_kmh = s.end_speed_kmh;
+  if (s.end_step_m > 0) options.end_step_length_m = s.end_step_m;
   const Eigen::Vector2d start_pixel = s.start_pixel.size() == 2
                                           ? Eigen::Vector2d(s.start_pixel[0], s.start_pixel[1])
                                           : Eigen::Vector2d(0.75 * camera.width(), 0.85 * camera.height());
@@ -219,18 +223,24 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   csv.close();
   if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write (disk full?)");
   if (!walk.gait_note.empty()) std::fprintf(stderr, "make_synthetic: %s\n", walk.gait_note.c_str());
-  if (s.norms.empty())
-    std::printf("make_synthetic: %zu frames at %.1f fps, %.2f km/h, %.2f m steps, slope %.3f rad, seed %llu "
-                "(%d prior sample%s)\n",
-                walk.frames.size(), options.fps, options.speed_kmh, options.step_length_m,
-                options.slope_rad, static_cast<unsigned long long>(options.seed), walk.attempts,
-                walk.attempts == 1 ? "" : "s");
-  else
+  if (s.norms.empty()) {
+    char gait[96];
+    if (options.end_speed_kmh || options.end_step_length_m)
+      std::snprintf(gait, sizeof gait, "%.2f to %.2f km/h, %.2f to %.2f m steps", options.speed_kmh,
+                    options.end_speed_kmh.value_or(options.speed_kmh), options.step_length_m,
+                    options.end_step_length_m.value_or(options.step_length_m));
+    else
+      std::snprintf(gait, sizeof gait, "%.2f km/h, %.2f m steps", options.speed_kmh, options.step_length_m);
+    std::printf("make_synthetic: %zu frames at %.1f fps, %s, slope %.3f rad, seed %llu (%d prior sample%s)\n",
+                walk.frames.size(), options.fps, gait, options.slope_rad,
+                static_cast<unsigned long long>(options.seed), walk.attempts, walk.attempts == 1 ? "" : "s");
+  } else {
     std::printf("make_synthetic: %zu frames at %.1f fps, walked by the gait norms %s at %.2f to %.2f km/h, "
                 "%.2f m mean steps, level, heading %.3f rad, seed %llu\n",
                 walk.frames.size(), options.fps, s.norms.c_str(), options.speed_kmh,
                 s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh, meanStepLength(walk),
                 options.heading_rad, static_cast<unsigned long long>(options.seed));
+  }
   std::printf("person %.0f-%.0f px tall; wrote %s.bag, %s_ground_truth.csv, %s_camera.yml, %s.avi\n",
               smallest_px, largest_px, stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
   return 0;
@@ -299,12 +309,16 @@ int main(int argc, char** argv) {
                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
   auto* slope = app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill (not with --norms)")
                     ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.2, 0.2));
-  app.add_option("--norms", s.norms,
+  auto* norms = app.add_option("--norms", s.norms,
                  "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
                  "prior did not make")->excludes(step)->excludes(slope);
   app.add_option("--end-speed", s.end_speed_kmh,
-                 "with --norms: the speed at the end, km/h; the speed changes linearly from --speed (default: --speed)")
+                 "the speed at the end, km/h; the speed changes linearly from --speed (default: --speed); by the "
+                 "prior, each stride walks the gait of its heel strike's moment")
       ->check(kneed_walker::tools::FiniteRange(0.5, 10));
+  app.add_option("--end-step", s.end_step_m,
+                 "by the prior: the step length at the end, m; it changes linearly from --step (default: --step)")
+      ->excludes(norms)->check(kneed_walker::tools::FiniteRange(0.1, 3));
   app.add_option("--oblique", s.oblique_deg,
                  "turn the default walking direction (across the view) away from the camera by this, degrees")
       ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-80, 80));
@@ -335,10 +349,6 @@ int main(int argc, char** argv) {
   }
   if (w.duration_s * w.fps > 100000) {
     std::fprintf(stderr, "make_synthetic: --duration times --fps is %g frames; at most 100000\n", w.duration_s * w.fps);
-    return 2;
-  }
-  if (s.end_speed_kmh > 0 && s.norms.empty()) {
-    std::fprintf(stderr, "make_synthetic: --end-speed needs --norms (the prior walks at one speed)\n");
     return 2;
   }
   std::vector<std::string> outputs;

@@ -2,15 +2,19 @@
 // on a table gait just after a heel strike, runs the prior's transition frame by frame, and
 // counts heel strikes and falls until `--strides` strides have ended either way. With
 // `--chain 1` every stride starts from the gait; with `--chain N` a particle walks on for N
-// strides, so that errors can build up from stride to stride.
+// strides, so that errors can build up from stride to stride. With `--end-speed` and/or
+// `--end-step` the gait changes along each chain, stride by stride, linearly from the start's to
+// the end's (a person slowing down or speeding up: issue 13's 7 -> 3 km/h profile).
 //
 //   rosrun kneed_walker sample_prior --table config/prior_gait_table.yaml --prior config/prior.yaml
-//          [--speed 4.5] [--step 0.7] [--slope 0] [--strides 1000] [--chain 1] [--fps 30]
-//          [--seed 1] [--noise-scale 1]
+//          [--speed 4.5] [--step 0.7] [--slope 0] [--end-speed V] [--end-step L] [--strides 1000]
+//          [--chain 1] [--fps 30] [--seed 1] [--noise-scale 1]
 #include <CLI/CLI.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <set>
+#include <vector>
 
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/prior/walker_prior.h"
@@ -24,6 +28,7 @@ int main(int argc, char** argv) {
   std::string table_path = kneed_walker::tools::packageFile("config/prior_gait_table.yaml");
   std::string prior_path = kneed_walker::tools::packageFile("config/prior.yaml");
   double speed_kmh = 4.5, step_m = 0.7, slope = 0.0, fps = 30, noise_scale = 1.0;
+  double end_speed_kmh = 0, end_step_m = 0;  // 0: as at the start
   int strides = 1000, chain = 1;
   unsigned seed = 1;
   app.add_option("--table", table_path, "gait table (YAML)")->check(CLI::ExistingFile)->capture_default_str();
@@ -34,31 +39,59 @@ int main(int argc, char** argv) {
   app.add_option("--speed", speed_kmh, "gait speed, km/h")->check(kneed_walker::tools::FiniteRange(0.1, 20));
   app.add_option("--step", step_m, "gait step length, m")->check(kneed_walker::tools::FiniteRange(0.1, 3));
   app.add_option("--slope", slope, "ground slope, rad")->check(kneed_walker::tools::FiniteRange(-0.5, 0.5));
+  app.add_option("--end-speed", end_speed_kmh, "with --chain N >= 2: the gait speed of a chain's last stride, km/h; "
+                 "the speed changes linearly from --speed over the chain's strides (default: --speed)")
+      ->check(kneed_walker::tools::FiniteRange(0.1, 20));
+  app.add_option("--end-step", end_step_m, "with --chain N >= 2: the step length of a chain's last stride, m "
+                 "(default: --step)")->check(kneed_walker::tools::FiniteRange(0.1, 3));
   app.add_option("--strides", strides, "strides to sample")->check(CLI::Range(1, 1000000));
   app.add_option("--chain", chain, "strides a particle walks on before a fresh one starts")->check(CLI::Range(1, 1000000));
   app.add_option("--fps", fps, "frame rate of the transitions, for the reference person")->check(kneed_walker::tools::FiniteRange(1.0, 1000.0));
   app.add_option("--seed", seed, "random seed");
   app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(kneed_walker::tools::FiniteRange(0.0, 100.0));
   CLI11_PARSE(app, argc, argv);
+  const bool changing = end_speed_kmh > 0 || end_step_m > 0;
+  if (changing && chain < 2) {
+    std::fprintf(stderr, "sample_prior: --end-speed and --end-step change the gait along a chain: give --chain 2 or more\n");
+    return 2;
+  }
+  if (end_speed_kmh <= 0) end_speed_kmh = speed_kmh;
+  if (end_step_m <= 0) end_step_m = step_m;
   try {
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
-    kw::gait::InterpolationNote note;
-    kw::gait::Gait gait = kw::gait::interpolateGait(table, speed_kmh, step_m, slope, &note);
-    if (!note.exact()) std::fprintf(stderr, "sample_prior: %s\n", note.describe(table.grid).c_str());
-    gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
     kw::prior::PriorOptions options = kw::prior::loadPriorOptions(prior_path);
     kw::prior::requirePriorTable(table, options);
     for (double& s : options.noise_scale) s *= noise_scale;
-    const kw::prior::WalkerPrior prior(sim, gait, options);
+    // One prior per stride of a chain: the gait at its place along the speed and step change.
+    std::vector<kw::prior::WalkerPrior> stride_priors;
+    std::set<std::string> notes;
+    for (int k = 0, n = changing ? chain : 1; k < n; ++k) {
+      const double f = n > 1 ? static_cast<double>(k) / (n - 1) : 0.0;
+      kw::gait::InterpolationNote note;
+      stride_priors.emplace_back(sim,
+                                 kw::prior::priorGait(table, sim, (1 - f) * speed_kmh + f * end_speed_kmh,
+                                                      (1 - f) * step_m + f * end_step_m, slope, &note),
+                                 options);
+      if (!note.exact()) notes.insert(note.describe(table.grid));
+    }
+    for (const std::string& note : notes) std::fprintf(stderr, "sample_prior: %s\n", note.c_str());
     kw::common::Random random(seed);
     const double dt = (1.0 / fps) / std::sqrt(table.grid.referenceLegLength() / table.grid.gravity);
-    const kw::prior::WalkingFraction count = kw::prior::sampleStrides(prior, strides, chain, dt, random);
-    std::printf("gait %.1f km/h, %.2f m, slope %.3f rad; %d strides in chains of %d at %.0f fps, noise x%g, seed %u\n",
-                speed_kmh, step_m, slope, count.walked + count.fell, chain, fps, noise_scale, seed);
+    const kw::prior::WalkingFraction count = kw::prior::sampleStrides(stride_priors, strides, chain, dt, random);
+    if (changing)
+      std::printf("gait %.1f to %.1f km/h, %.2f to %.2f m, slope %.3f rad; %d strides in chains of %d at %.0f fps, "
+                  "noise x%g, seed %u\n",
+                  speed_kmh, end_speed_kmh, step_m, end_step_m, slope, count.walked + count.fell, chain, fps,
+                  noise_scale, seed);
+    else
+      std::printf("gait %.1f km/h, %.2f m, slope %.3f rad; %d strides in chains of %d at %.0f fps, noise x%g, seed %u\n",
+                  speed_kmh, step_m, slope, count.walked + count.fell, chain, fps, noise_scale, seed);
     std::printf("walking_fraction=%.4f (%d strides ended in a heel strike, %d in a fall)\n",
                 count.fraction(), count.walked, count.fell);
+    std::printf("chains_walked_fraction=%.4f (%d chains of %d strides walked to the end, %d fell)\n",
+                count.chainFraction(), count.chains_walked, chain, count.chains_fell);
     std::printf("pulling_landing_falls=%d (of the %d falls, at a heel strike that needed the ground to pull)\n",
                 count.pulling, count.fell);
   } catch (const std::exception& e) {

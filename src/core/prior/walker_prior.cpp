@@ -88,6 +88,20 @@ void requirePriorTable(const gait::GaitTable& table, const PriorOptions& o) {
                                 message.str() + "(re-run optimize_gaits --prior-fixed with them)");
 }
 
+gait::Gait priorGait(const gait::GaitTable& table, const dynamics::WalkerSimulator& simulator,
+                     double speed_kmh, double step_length_m, double slope_rad, gait::InterpolationNote* note) {
+  gait::Gait gait = gait::interpolateGait(table, speed_kmh, step_length_m, slope_rad, note);
+  const dynamics::StrideResult stride = simulator.stride(gait.controls, gait.start);
+  if (!stride.completed) {
+    std::ostringstream message;
+    message << "the gait interpolated at " << speed_kmh << " km/h, " << step_length_m << " m steps, slope "
+            << slope_rad << " rad does not complete a stride";
+    throw std::runtime_error(message.str());
+  }
+  gait.stride_duration = stride.duration;
+  return gait;
+}
+
 WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait::Gait& gait,
                          const PriorOptions& options)
     : sim_(simulator), gait_(gait), options_(options) {
@@ -165,23 +179,32 @@ dynamics::AdvanceReport WalkerPrior::transition(WalkerParticle& p, double dt, co
   return sim_.advance(controls(p), p.walker, dt);
 }
 
-WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides_per_chain,
-                              double dt, common::Random& random) {
-  if (strides < 1 || strides_per_chain < 1 || !(dt > 0))
-    throw std::invalid_argument("sampleStrides needs strides >= 1, strides_per_chain >= 1, dt > 0");
+WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int strides,
+                              int strides_per_chain, double dt, common::Random& random) {
+  if (stride_priors.empty() || strides < 1 || strides_per_chain < 1 || !(dt > 0))
+    throw std::invalid_argument("sampleStrides needs a prior, strides >= 1, strides_per_chain >= 1, dt > 0");
+  const int last = static_cast<int>(stride_priors.size()) - 1;
   WalkingFraction count;
   while (count.walked + count.fell < strides) {
-    WalkerParticle particle = prior.sample(0.0, random);
-    for (int in_chain = 0; in_chain < strides_per_chain && count.walked + count.fell < strides;) {
+    WalkerParticle particle = stride_priors.front().sample(0.0, random);
+    int in_chain = 0;
+    bool fell = false;
+    while (in_chain < strides_per_chain && count.walked + count.fell < strides) {
+      const WalkerPrior& prior = stride_priors[std::min(in_chain, last)];
       const dynamics::AdvanceReport report = prior.transition(particle, dt, random);
       count.walked += report.heel_strikes;
       count.pulling += report.pulling_heel_strikes;
       in_chain += report.heel_strikes;
       if (report.fell) {
         ++count.fell;
+        fell = true;
         break;
       }
     }
+    if (fell)
+      ++count.chains_fell;
+    else if (in_chain >= strides_per_chain)
+      ++count.chains_walked;
   }
   return count;
 }

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,6 +19,8 @@ std::vector<std::string> validate(const SyntheticWalkOptions& o) {
   };
   positive("speed_kmh", o.speed_kmh);
   positive("step_length_m", o.step_length_m);
+  if (o.end_speed_kmh) positive("end_speed_kmh", *o.end_speed_kmh);
+  if (o.end_step_length_m) positive("end_step_length_m", *o.end_step_length_m);
   positive("duration_s", o.duration_s);
   positive("fps", o.fps);
   if (!(o.person_height_m >= 1.0 && o.person_height_m <= 2.3))
@@ -40,21 +44,31 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   walk.leg_length_m = leg_length_m;
   // Froude similarity: the same dimensionless gait for the table's reference person.
   const double reference_leg_m = table.grid.referenceLegLength();
-  const double speed_ref_kmh = o.speed_kmh * std::sqrt(reference_leg_m / leg_length_m);
-  const double step_ref_m = o.step_length_m * reference_leg_m / leg_length_m;
+  const double speed_scale = std::sqrt(reference_leg_m / leg_length_m);
+  const double end_speed_kmh = o.end_speed_kmh.value_or(o.speed_kmh);
+  const double end_step_m = o.end_step_length_m.value_or(o.step_length_m);
+  const bool changing = end_speed_kmh != o.speed_kmh || end_step_m != o.step_length_m;
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
-  gait::InterpolationNote note;
-  walk.gait = gait::interpolateGait(table, speed_ref_kmh, step_ref_m, o.slope_rad, &note);
-  walk.gait_note = note.describe(table.grid);
-  const dynamics::StrideResult stride = sim.stride(walk.gait.controls, walk.gait.start);
-  if (!stride.completed)
-    throw std::runtime_error("synthetic walk: the interpolated gait does not complete a stride");
-  walk.gait.stride_duration = stride.duration;
-
   prior::PriorOptions options = prior_options;
   if (o.slope_rad != 0) options.placement.heading_sigma = 0;  // the slope is one plane
-  const prior::BodyPrior prior(prior::WalkerPrior(sim, walk.gait, options), o.person_height_m,
-                               table.grid.leg_length_per_height, table.grid.gravity);
+  std::set<std::string> notes;
+  // The prior around the gait at fraction f ∈ [0, 1] of the walk's change of speed and step.
+  auto priorAt = [&](double f) {
+    gait::InterpolationNote note;
+    gait::Gait gait;
+    try {
+      gait = prior::priorGait(table, sim, ((1 - f) * o.speed_kmh + f * end_speed_kmh) * speed_scale,
+                              ((1 - f) * o.step_length_m + f * end_step_m) * reference_leg_m / leg_length_m,
+                              o.slope_rad, &note);
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(std::string("synthetic walk: ") + e.what());
+    }
+    if (!note.exact()) notes.insert(note.describe(table.grid));
+    return std::make_unique<const prior::BodyPrior>(prior::WalkerPrior(sim, gait, options), o.person_height_m,
+                                                    table.grid.leg_length_per_height, table.grid.gravity);
+  };
+  const std::unique_ptr<const prior::BodyPrior> start_prior = priorAt(0.0);
+  walk.gait = start_prior->walkerPrior().gait();
   const double frame_s = 1.0 / o.fps;
   const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;
 
@@ -63,20 +77,32 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   double longest_s = 0;  // walked before falling, over the samples
   for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
     SyntheticFrame frame;
-    prior::BodyParticle particle = prior.sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
+    std::unique_ptr<const prior::BodyPrior> changed_prior;  // the stride's, during a change
+    const prior::BodyPrior* prior = start_prior.get();
+    prior::BodyParticle particle = prior->sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
     walk.ground = vision::GroundPlane{particle.placement.value.ground_origin_m, o.slope_rad, o.heading_rad};
     walk.frames.clear();
     walk.frames.reserve(frame_count);
     bool fell = false;
     for (int i = 0; i < frame_count && !fell; ++i) {
-      if (i > 0) fell = prior.transition(particle, frame_s, random, frame.pose).fell;
+      if (i > 0) {
+        const std::uint32_t strikes = particle.walker.walker.heel_strikes;
+        fell = prior->transition(particle, frame_s, random, frame.pose).fell;
+        if (changing && particle.walker.walker.heel_strikes != strikes) {  // the next stride's gait
+          changed_prior = priorAt(std::min(1.0, i * frame_s / o.duration_s));
+          prior = changed_prior.get();
+        }
+      }
       if (fell) longest_s = std::max(longest_s, (i - 1) * frame_s);
       frame.time_s = i * frame_s;
       frame.walker = particle.walker.walker;
       frame.placement = particle.placement.value;
       walk.frames.push_back(frame);
     }
-    if (!fell) return walk;
+    if (!fell) {
+      for (const std::string& note : notes) walk.gait_note += (walk.gait_note.empty() ? "" : "; ") + note;
+      return walk;
+    }
   }
   std::ostringstream message;
   message << "synthetic walk: all " << o.max_attempts << " samples of the prior fell within the " << o.duration_s

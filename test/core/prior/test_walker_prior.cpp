@@ -241,7 +241,8 @@ TEST(WalkerPrior, StridesAreDrawnAtHeelStrikesKneesStayFlexedTorsoRestsAtAThirdO
 // the floor of 85 % there guards against regressions.
 TEST(WalkerPrior, SampledStridesKeepWalking) {
   const Fixture f;
-  const WalkerPrior prior(f.sim, f.gait, loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml"));
+  const std::vector<WalkerPrior> prior{
+      WalkerPrior(f.sim, f.gait, loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml"))};
   const double dt = (1.0 / 30) / std::sqrt(0.53 * 1.75 / 9.81);  // natural time units
   common::Random random(1);
   const WalkingFraction single = sampleStrides(prior, 1000, 1, dt, random);
@@ -261,7 +262,28 @@ TEST(WalkerPrior, WalkingFractionFallsWithTooMuchNoise) {
   noisy.noise_scale[dynamics::kHip] = 0.002;
   const double dt = 0.1;
   common::Random random(2);
-  EXPECT_LT(sampleStrides(WalkerPrior(f.sim, f.gait, noisy), 300, 1, dt, random).fraction(), 0.95);
+  EXPECT_LT(sampleStrides({WalkerPrior(f.sim, f.gait, noisy)}, 300, 1, dt, random).fraction(), 0.95);
+}
+
+// A chain's k-th stride walks around the k-th prior (the last one after the list ends): with a
+// prior that topples every stride second in the list, chains of one stride walk and longer ones
+// fall at their second stride.
+TEST(WalkerPrior, EachStrideOfAChainWalksItsOwnPrior) {
+  const Fixture f;
+  PriorOptions toppling;
+  toppling.noise_scale[dynamics::kHip] = 0.05;
+  const std::vector<WalkerPrior> priors{WalkerPrior(f.sim, f.gait, PriorOptions{}),
+                                        WalkerPrior(f.sim, f.gait, toppling)};
+  const double dt = 0.1;
+  common::Random random(3);
+  const WalkingFraction single = sampleStrides(priors, 200, 1, dt, random);
+  const WalkingFraction chained = sampleStrides(priors, 200, 5, dt, random);
+  std::cout << "single strides " << single.fraction() << " walked; chains of 5: " << chained.chains_walked
+            << " of " << chained.chains_walked + chained.chains_fell << ", strides " << chained.fraction() << "\n";
+  EXPECT_EQ(single.fraction(), 1.0);
+  EXPECT_EQ(single.chains_walked, 200);
+  EXPECT_LT(chained.chainFraction(), 0.1);
+  EXPECT_LT(chained.fraction(), 0.7);
 }
 
 // The placement processes: turning keeps the pivot (the stance foot) in place, the sway stays

@@ -108,6 +108,14 @@ struct WalkerParticle {
 // walk on ±4.3° slopes). Throws std::invalid_argument naming the mismatch.
 void requirePriorTable(const gait::GaitTable& table, const PriorOptions& options);
 
+// The gait the prior walks around at a target of the table (speed and step length for the
+// table's reference person): gait::interpolateGait, with one stride simulated for the
+// stride_duration that WalkerPrior needs. Throws std::runtime_error if that stride does not
+// complete (a fall), std::out_of_range for a target outside the table.
+gait::Gait priorGait(const gait::GaitTable& table, const dynamics::WalkerSimulator& simulator,
+                     double speed_kmh, double step_length_m, double slope_rad,
+                     gait::InterpolationNote* note = nullptr);
+
 class WalkerPrior {
  public:
   // `gait` supplies the means of the stride stiffnesses, the slope and the start state; the
@@ -145,17 +153,24 @@ class WalkerPrior {
   std::array<dynamics::WalkerState, kCycleStates> cycle_;  // the gait's stride at phases k / kCycleStates
 };
 
-// How often the prior's sampled strides keep walking. Each chain starts on the gait just after
-// a heel strike with fresh samples and runs the transition frame by frame (dt, natural time)
-// until `strides_per_chain` strides have ended in a heel strike or one in a fall; chains are
-// sampled until `strides` strides have ended either way.
+// How often the prior's sampled strides keep walking. Each chain starts on the first prior's
+// gait just after a heel strike with fresh samples and runs the transition frame by frame (dt,
+// natural time) until `strides_per_chain` strides have ended in a heel strike or one in a fall;
+// chains are sampled until `strides` strides have ended either way. A chain's k-th stride (from
+// 0) walks around `stride_priors[min(k, size − 1)]`: one prior walks one gait throughout, one per
+// stride walks a change of speed, the new gait taking over at the heel strike as in the
+// tracker's gait changes.
 struct WalkingFraction {
   int walked = 0;  // strides that ended in a heel strike
   int fell = 0;    // strides that ended in a fall
   int pulling = 0;  // of the falls, those at a landing that needed the ground to pull (AdvanceReport)
+  int chains_walked = 0, chains_fell = 0;  // whole chains (one cut short by `strides` is neither)
   double fraction() const { return walked + fell > 0 ? double(walked) / (walked + fell) : 0.0; }
+  double chainFraction() const {
+    return chains_walked + chains_fell > 0 ? double(chains_walked) / (chains_walked + chains_fell) : 0.0;
+  }
 };
-WalkingFraction sampleStrides(const WalkerPrior& prior, int strides, int strides_per_chain,
-                              double dt, common::Random& random);
+WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int strides,
+                              int strides_per_chain, double dt, common::Random& random);
 
 }  // namespace kneed_walker::core::prior

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,8 +22,12 @@
 namespace kneed_walker::core::synthetic {
 
 struct SyntheticWalkOptions {
-  double speed_kmh = 4.5;        // mean walking speed
-  double step_length_m = 0.7;    // mean step length
+  double speed_kmh = 4.5;        // mean walking speed (at the start, with a speed change)
+  double step_length_m = 0.7;    // mean step length (at the start, with a step change)
+  // A change of speed and/or step length (issue 13: a person slowing from 7 to 3 km/h): the
+  // gait at the last frame; between, the gait changes linearly in time, taking over at each
+  // heel strike. Unset: as at the start.
+  std::optional<double> end_speed_kmh, end_step_length_m;
   double slope_rad = 0.0;        // ground slope along the walk, positive uphill
   double heading_rad = 0.0;      // initial walking direction in the world XY plane
   Eigen::Vector2d start_m = Eigen::Vector2d::Zero();  // world XY of the first stance foot
@@ -44,16 +49,17 @@ struct SyntheticFrame {
 };
 
 struct SyntheticWalk {
-  gait::Gait gait;        // the table gait the prior walked around (dimensionless)
+  gait::Gait gait;        // the table gait the prior walked around first (dimensionless)
   double leg_length_m = 0;
   vision::GroundPlane ground;
   int attempts = 0;       // prior samples drawn (a sample that fell is discarded)
-  std::string gait_note;  // "" or what the interpolation did at a hole in the table
+  std::string gait_note;  // "" or what the interpolation did at holes in the table
   std::vector<SyntheticFrame> frames;
 };
 
 // Walks the person by the prior for options.duration_s. Speed and step length are the
-// person's; they scale to the table's reference person by Froude similarity. On a slope the
+// person's; they scale to the table's reference person by Froude similarity. With an end speed
+// or step, each stride from a heel strike walks around the gait of that moment of the change. On a slope the
 // heading is held (the ground is one plane rising along it); on the level it wanders by the
 // placement processes. Throws std::invalid_argument for bad options, std::out_of_range for a
 // gait outside the table, std::runtime_error when no sample walks the whole duration.
