@@ -51,7 +51,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
   prior::PriorOptions options = prior_options;
   if (o.slope_rad != 0) options.placement.heading_sigma = 0;  // the slope is one plane
-  std::set<std::string> notes;
+  std::set<std::string> notes;  // of the gaits walked: the start's, then the sample's strides'
   // The prior around the gait at fraction f ∈ [0, 1] of the walk's change of speed and step.
   auto priorAt = [&](double f) {
     gait::InterpolationNote note;
@@ -68,6 +68,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
                                                     table.grid.leg_length_per_height, table.grid.gravity);
   };
   const std::unique_ptr<const prior::BodyPrior> start_prior = priorAt(0.0);
+  const std::set<std::string> start_notes = notes;
   walk.gait = start_prior->walkerPrior().gait();
   const double frame_s = 1.0 / o.fps;
   const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;
@@ -77,6 +78,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   double longest_s = 0;  // walked before falling, over the samples
   for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
     SyntheticFrame frame;
+    notes = start_notes;
     std::unique_ptr<const prior::BodyPrior> changed_prior;  // the stride's, during a change
     const prior::BodyPrior* prior = start_prior.get();
     prior::BodyParticle particle = prior->sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);

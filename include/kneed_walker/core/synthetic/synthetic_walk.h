@@ -59,10 +59,11 @@ struct SyntheticWalk {
 
 // Walks the person by the prior for options.duration_s. Speed and step length are the
 // person's; they scale to the table's reference person by Froude similarity. With an end speed
-// or step, each stride from a heel strike walks around the gait of that moment of the change. On a slope the
-// heading is held (the ground is one plane rising along it); on the level it wanders by the
-// placement processes. Throws std::invalid_argument for bad options, std::out_of_range for a
-// gait outside the table, std::runtime_error when no sample walks the whole duration.
+// or step, each stride from a heel strike walks around the gait of that moment of the change.
+// On a slope the heading is held (the ground is one plane rising along it); on the level it
+// wanders by the placement processes. Throws std::invalid_argument for bad options,
+// std::out_of_range for a gait outside the table, std::runtime_error when no sample walks the
+// whole duration.
 SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOptions& prior,
                              const SyntheticWalkOptions& options);
 
