@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <stdexcept>
 #include <vector>
 
 #include "kneed_walker/core/gait/gait_table.h"
@@ -22,6 +23,9 @@
 #include "package_files.h"
 
 namespace kw = kneed_walker::core;
+
+// With a change of gait, one prior per stride of a chain is built and held (about 10 kB each).
+constexpr int kMaxChangingChain = 1000;
 
 int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
@@ -51,8 +55,9 @@ int main(int argc, char** argv) {
   app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(kneed_walker::tools::FiniteRange(0.0, 100.0));
   CLI11_PARSE(app, argc, argv);
   const bool changing = end_speed_kmh > 0 || end_step_m > 0;
-  if (changing && chain < 2) {
-    std::fprintf(stderr, "sample_prior: --end-speed and --end-step change the gait along a chain: give --chain 2 or more\n");
+  if (changing && (chain < 2 || chain > kMaxChangingChain)) {
+    std::fprintf(stderr, "sample_prior: --end-speed and --end-step change the gait along a chain, a prior per stride: "
+                 "give --chain from 2 to %d\n", kMaxChangingChain);
     return 2;
   }
   if (end_speed_kmh <= 0) end_speed_kmh = speed_kmh;
@@ -67,6 +72,14 @@ int main(int argc, char** argv) {
     // One prior per stride of a chain: the gait at its place along the speed and step change.
     std::vector<kw::prior::WalkerPrior> stride_priors;
     std::set<std::string> notes;
+    if (changing) {  // the change's end inside the table, said in the options' terms before the strides
+      try {
+        kw::gait::interpolateGait(table, end_speed_kmh, end_step_m, slope);
+      } catch (const std::out_of_range& e) {
+        std::fprintf(stderr, "sample_prior: --end-speed %g / --end-step %g: %s\n", end_speed_kmh, end_step_m, e.what());
+        return 2;
+      }
+    }
     for (int k = 0, n = changing ? chain : 1; k < n; ++k) {
       const double f = n > 1 ? static_cast<double>(k) / (n - 1) : 0.0;
       kw::gait::InterpolationNote note;

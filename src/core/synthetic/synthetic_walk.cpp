@@ -67,6 +67,17 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
     return std::make_unique<const prior::BodyPrior>(prior::WalkerPrior(sim, gait, options), o.person_height_m,
                                                     table.grid.leg_length_per_height, table.grid.gravity);
   };
+  if (changing) {  // the change's end inside the table, said in its own terms before any walking
+    try {
+      priorAt(1.0);
+    } catch (const std::out_of_range& e) {
+      std::ostringstream message;
+      message << "synthetic walk: end_speed_kmh = " << end_speed_kmh << ", end_step_length_m = " << end_step_m
+              << ": " << e.what();
+      throw std::out_of_range(message.str());
+    }
+    notes.clear();
+  }
   const std::unique_ptr<const prior::BodyPrior> start_prior = priorAt(0.0);
   const std::set<std::string> start_notes = notes;
   walk.gait = start_prior->walkerPrior().gait();
