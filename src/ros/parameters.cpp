@@ -134,7 +134,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("min_gait_speed_kmh", t.min_gait_speed_kmh);
   reader.read("min_gait_step_m", t.min_gait_step_m);
   reader.read("person_breadth_scale", t.person_breadth_scale);
-  reader.read("gait_change_probability", t.gait_change_probability);
+  reader.read("gait_speed_sd_kmh", t.gait_speed_sd_kmh);
+  reader.read("gait_step_sd_m", t.gait_step_sd_m);
   reader.read("lost_likelihood_fraction", t.lost_likelihood_fraction);
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);

@@ -244,9 +244,12 @@ int main(int argc, char** argv) {
                  "slowest gait of the table the particles may walk, km/h (1.5 with --min-gait-step 0.3: the slow "
                  "walks of strolling people)")
       ->capture_default_str()->check(FiniteRange(0.0, 20.0));
-  app.add_option("--gait-change", options.gait_change_probability,
-                 "probability that a new stride walks a neighbouring gait of the table (speed changes)")
-      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
+  app.add_option("--gait-speed-sd", options.gait_speed_sd_kmh,
+                 "speed changes: the spread of a particle's target speed's random step at each heel strike, km/h")
+      ->capture_default_str()->check(FiniteRange(0.0, 5.0));
+  app.add_option("--gait-step-sd", options.gait_step_sd_m,
+                 "step changes: the spread of a particle's target step length's random step at each heel strike, m")
+      ->capture_default_str()->check(FiniteRange(0.0, 0.5));
   app.add_option("--lost-fraction", options.lost_likelihood_fraction,
                  "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its "
                  "recent median (0: below 0 only)")

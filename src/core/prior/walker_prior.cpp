@@ -102,26 +102,32 @@ gait::Gait priorGait(const gait::GaitTable& table, const dynamics::WalkerSimulat
   return gait;
 }
 
+void walkGait(WalkerParticle& p, const gait::Gait& gait) {
+  p.gait = gait.controls;
+  p.gait.ground_slope = gait.target.slope;
+}
+
 WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait::Gait& gait,
                          const PriorOptions& options)
     : sim_(simulator), gait_(gait), options_(options) {
   const auto problems = validate(options);
   common::throwIfInvalid("PriorOptions", problems);
   if (!(gait.stride_duration > 0)) throw std::invalid_argument("WalkerPrior needs a simulated gait");
-  gait_stiffness_ = {gait.controls.springs.stance_knee_stiffness,
-                     gait.controls.springs.hip_stiffness, gait.controls.springs.torso_stiffness};
-  dynamics::WalkerControls controls = gait_.controls;
-  controls.ground_slope = gait_.target.slope;
+  WalkerParticle on_cycle;
+  walkGait(on_cycle, gait_);
   cycle_[0] = gait_.start;
   for (int k = 1; k < kCycleStates; ++k) {
     cycle_[k] = cycle_[k - 1];
-    sim_.advance(controls, cycle_[k], gait_.stride_duration / kCycleStates);
+    sim_.advance(on_cycle.gait, cycle_[k], gait_.stride_duration / kCycleStates);
   }
 }
 
 void WalkerPrior::newStride(WalkerParticle& p, common::Random& random) const {
+  const dynamics::SpringParameters& gait = p.gait.springs;
+  const std::array<double, kNumPriorStiffnesses> gait_stiffness{
+      {gait.stance_knee_stiffness, gait.hip_stiffness, gait.torso_stiffness}};
   for (int i = 0; i < kNumPriorStiffnesses; ++i) {
-    std::normal_distribution<double> mean(gait_stiffness_[i] + options_.stride_mean_offset[i],
+    std::normal_distribution<double> mean(gait_stiffness[i] + options_.stride_mean_offset[i],
                                           options_.stride_sd[i]);
     p.stride_mean[i] = std::max(0.0, mean(random));
   }
@@ -131,7 +137,7 @@ void WalkerPrior::newStride(WalkerParticle& p, common::Random& random) const {
     std::exponential_distribution<double> exponential(1.0 / options_.impulse_scale);
     spread = exponential(random) - options_.impulse_scale;
   }
-  p.next_impulse = std::max(0.0, gait_.controls.toe_off_impulse + spread);
+  p.next_impulse = std::max(0.0, p.gait.toe_off_impulse + spread);
   p.stride_of_means = p.walker.heel_strikes;
 }
 
@@ -140,6 +146,7 @@ WalkerParticle WalkerPrior::sample(double phase, common::Random& random, Start s
   const int k = start == Start::kFromCycle ? std::min(kCycleStates - 1, static_cast<int>(phase * kCycleStates)) : 0;
   WalkerParticle p;
   p.walker = cycle_[k];  // cycle_[0] is the stride's start
+  walkGait(p, gait_);
   newStride(p, random);
   p.stiffness = p.stride_mean;
   sim_.advance(controls(p), p.walker, (phase - static_cast<double>(k) / kCycleStates) * gait_.stride_duration);
@@ -148,11 +155,10 @@ WalkerParticle WalkerPrior::sample(double phase, common::Random& random, Start s
 }
 
 dynamics::WalkerControls WalkerPrior::controls(const WalkerParticle& p) const {
-  // The gait's own dampings, swing knee spring and torso rest angle (the fixed values for a
-  // table optimised with them held, and its optimal swing knee stiffness); the sampled
-  // stiffnesses and the noise of eq. 11.
-  dynamics::WalkerControls c = gait_.controls;
-  c.ground_slope = gait_.target.slope;
+  // The particle's gait's own dampings, swing knee spring and torso rest angle (the fixed
+  // values for a table optimised with them held, and its optimal swing knee stiffness); the
+  // sampled stiffnesses and the noise of eq. 11.
+  dynamics::WalkerControls c = p.gait;
   c.springs.stance_knee_stiffness = p.stiffness[kPriorStanceKnee];
   c.springs.hip_stiffness = p.stiffness[kPriorHip];
   c.springs.torso_stiffness = p.stiffness[kPriorTorso];
@@ -195,6 +201,7 @@ WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int
       count.walked += report.heel_strikes;
       count.pulling += report.pulling_heel_strikes;
       in_chain += report.heel_strikes;
+      if (report.heel_strikes > 0) walkGait(particle, stride_priors[std::min(in_chain, last)].gait());
       if (report.fell) {
         ++count.fell;
         fell = true;

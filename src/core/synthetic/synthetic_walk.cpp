@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -52,8 +51,8 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   prior::PriorOptions options = prior_options;
   if (o.slope_rad != 0) options.placement.heading_sigma = 0;  // the slope is one plane
   std::set<std::string> notes;  // of the gaits walked: the start's, then the sample's strides'
-  // The prior around the gait at fraction f ∈ [0, 1] of the walk's change of speed and step.
-  auto priorAt = [&](double f) {
+  // The gait at fraction f ∈ [0, 1] of the walk's change of speed and step.
+  auto gaitAt = [&](double f) {
     gait::InterpolationNote note;
     gait::Gait gait;
     try {
@@ -64,12 +63,11 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
       throw std::runtime_error(std::string("synthetic walk: ") + e.what());
     }
     if (!note.exact()) notes.insert(note.describe(table.grid));
-    return std::make_unique<const prior::BodyPrior>(prior::WalkerPrior(sim, gait, options), o.person_height_m,
-                                                    table.grid.leg_length_per_height, table.grid.gravity);
+    return gait;
   };
   if (changing) {  // the change's end inside the table, said in its own terms before any walking
     try {
-      priorAt(1.0);
+      gaitAt(1.0);
     } catch (const std::out_of_range& e) {
       std::ostringstream message;
       message << "synthetic walk: end_speed_kmh = " << end_speed_kmh << ", end_step_length_m = " << end_step_m
@@ -78,9 +76,10 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
     }
     notes.clear();
   }
-  const std::unique_ptr<const prior::BodyPrior> start_prior = priorAt(0.0);
+  walk.gait = gaitAt(0.0);
+  const prior::BodyPrior prior(prior::WalkerPrior(sim, walk.gait, options), o.person_height_m,
+                               table.grid.leg_length_per_height, table.grid.gravity);
   const std::set<std::string> start_notes = notes;
-  walk.gait = start_prior->walkerPrior().gait();
   const double frame_s = 1.0 / o.fps;
   const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;
 
@@ -90,9 +89,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
   for (walk.attempts = 1; walk.attempts <= o.max_attempts; ++walk.attempts) {
     SyntheticFrame frame;
     notes = start_notes;
-    std::unique_ptr<const prior::BodyPrior> changed_prior;  // the stride's, during a change
-    const prior::BodyPrior* prior = start_prior.get();
-    prior::BodyParticle particle = prior->sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
+    prior::BodyParticle particle = prior.sample(phase(random), o.start_m, o.heading_rad, random, frame.pose);
     walk.ground = vision::GroundPlane{particle.placement.value.ground_origin_m, o.slope_rad, o.heading_rad};
     walk.frames.clear();
     walk.frames.reserve(frame_count);
@@ -100,11 +97,9 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
     for (int i = 0; i < frame_count && !fell; ++i) {
       if (i > 0) {
         const std::uint32_t strikes = particle.walker.walker.heel_strikes;
-        fell = prior->transition(particle, frame_s, random, frame.pose).fell;
-        if (changing && particle.walker.walker.heel_strikes != strikes) {  // the next stride's gait
-          changed_prior = priorAt(std::min(1.0, i * frame_s / o.duration_s));
-          prior = changed_prior.get();
-        }
+        fell = prior.transition(particle, frame_s, random, frame.pose).fell;
+        if (changing && particle.walker.walker.heel_strikes != strikes)  // the next stride's gait
+          prior::walkGait(particle.walker, gaitAt(std::min(1.0, i * frame_s / o.duration_s)));
       }
       if (fell) longest_s = std::max(longest_s, (i - 1) * frame_s);
       frame.time_s = i * frame_s;

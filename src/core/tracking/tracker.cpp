@@ -41,7 +41,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     : camera_(camera), ground_(ground), options_(options), likelihood_(likelihood) {
   common::throwIfInvalid("tracker options", validate(options));
   prior::requirePriorTable(table, prior_options);
-  // The gaits the particles walk around: the table's feasible gaits at the slope nearest the
+  // The gaits the particles start on: the table's feasible gaits at the slope nearest the
   // ground's, as fast and long-stepped as the options ask at least, scaled to the person by
   // Froude similarity.
   const gait::GaitGrid& grid = table.grid;
@@ -52,6 +52,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   const dynamics::WalkerSimulator simulator(dynamics::dimensionlessWalker(table.body));
   const double leg_m = table.body.leg_length_per_height * options.person_height_m;
   const double froude_speed = std::sqrt(leg_m / grid.referenceLegLength());
+  const double step_scale = leg_m / grid.referenceLegLength();
   for (int i = 0; i < grid.size(); ++i) {
     const auto cell = grid.cell(i);
     if (cell[2] != slope || !table.entries[i].feasible) continue;
@@ -62,9 +63,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
         prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
         table.body.leg_length_per_height, grid.gravity);
     gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
-    gait.step_length_m = grid.step_lengths_m[cell[1]] * leg_m / grid.referenceLegLength();
-    gait.speed_index = cell[0];
-    gait.step_index = cell[1];
+    gait.step_length_m = grid.step_lengths_m[cell[1]] * step_scale;
     bank_.push_back(std::move(gait));
   }
   if (bank_.empty())
@@ -77,12 +76,52 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     for (double* breadth : {&p.proximal_width_m, &p.proximal_depth_m, &p.distal_width_m, &p.distal_depth_m})
       *breadth *= options.person_breadth_scale;
   }
-  // Neighbours: a stride may move to a gait one grid step away in speed and step length.
-  for (size_t a = 0; a < bank_.size(); ++a)
-    for (size_t b = 0; b < bank_.size(); ++b)
-      if (a != b && std::abs(bank_[a].speed_index - bank_[b].speed_index) <= 1 &&
-          std::abs(bank_[a].step_index - bank_[b].step_index) <= 1)
-        bank_[a].neighbours.push_back(static_cast<int>(b));
+  // The targets' lattice over the bank's speeds and steps, 0.1 km/h and 1 cm apart.
+  const auto [slowest, fastest] = std::minmax_element(
+      bank_.begin(), bank_.end(), [](const BankGait& a, const BankGait& b) { return a.speed_kmh < b.speed_kmh; });
+  const auto [shortest, longest] = std::minmax_element(
+      bank_.begin(), bank_.end(), [](const BankGait& a, const BankGait& b) { return a.step_length_m < b.step_length_m; });
+  lattice_.speed0_kmh = slowest->speed_kmh;
+  lattice_.step0_m = shortest->step_length_m;
+  lattice_.speed_step_kmh = 0.1;
+  lattice_.step_step_m = 0.01;
+  lattice_.speeds = 1 + static_cast<int>(std::round((fastest->speed_kmh - lattice_.speed0_kmh) / lattice_.speed_step_kmh));
+  lattice_.steps = 1 + static_cast<int>(std::round((longest->step_length_m - lattice_.step0_m) / lattice_.step_step_m));
+  lattice_.gaits.resize(static_cast<size_t>(lattice_.speeds) * lattice_.steps);
+  lattice_.walkable.assign(lattice_.gaits.size(), 0);
+  for (int v = 0; v < lattice_.speeds; ++v)
+    for (int l = 0; l < lattice_.steps; ++l) {
+      const double speed_kmh = std::min(fastest->speed_kmh, lattice_.speed0_kmh + v * lattice_.speed_step_kmh);
+      const double step_m = std::min(longest->step_length_m, lattice_.step0_m + l * lattice_.step_step_m);
+      gait::InterpolationNote note;
+      const size_t k = static_cast<size_t>(v) * lattice_.steps + l;
+      // In the table's units, inside its grid (the scaling back may round past its ends).
+      const double table_speed_kmh = std::clamp(speed_kmh / froude_speed, grid.speeds_kmh.front(), grid.speeds_kmh.back());
+      const double table_step_m =
+          std::clamp(step_m / step_scale, grid.step_lengths_m.front(), grid.step_lengths_m.back());
+      lattice_.gaits[k] = gait::interpolateGait(table, table_speed_kmh, table_step_m, grid.slopes_rad[slope], &note);
+      lattice_.walkable[k] = note.nearest < 0;
+    }
+}
+
+int Tracker::GaitLattice::at(double speed_kmh, double step_m) const {
+  const double v = std::round((speed_kmh - speed0_kmh) / speed_step_kmh);
+  const double l = std::round((step_m - step0_m) / step_step_m);
+  if (!(v >= 0 && v < speeds && l >= 0 && l < steps)) return -1;
+  const int k = static_cast<int>(v) * steps + static_cast<int>(l);
+  return walkable[k] ? k : -1;
+}
+
+void Tracker::changeGait(TrackerParticle& p, common::Random& random) const {
+  if (options_.gait_speed_sd_kmh == 0 && options_.gait_step_sd_m == 0) return;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double speed_kmh = p.target_speed_kmh + options_.gait_speed_sd_kmh * normal(random);
+  const double step_m = p.target_step_m + options_.gait_step_sd_m * normal(random);
+  const int k = lattice_.at(speed_kmh, step_m);
+  if (k < 0) return;  // outside the gaits the particles may walk: the target stays
+  p.target_speed_kmh = speed_kmh;
+  p.target_step_m = step_m;
+  prior::walkGait(p.body.walker, lattice_.gaits[k]);
 }
 
 Tracker::~Tracker() = default;
@@ -103,7 +142,7 @@ body::BodyPose Tracker::onGround(body::BodyPose pose, const TrackerParticle& par
 }
 
 body::BodyPose Tracker::pose(const TrackerParticle& particle) const {
-  return onGround(bank_[particle.gait].prior->pose(particle.body), particle);
+  return onGround(bodyPrior().pose(particle.body), particle);
 }
 
 const body::BodyShape& Tracker::shape() const { return shape_; }
@@ -151,7 +190,6 @@ void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
   common::Random random(mixSeed(options_.seed, 0, 7, 0));
   body::BodyPose pose;
   TrackerParticle particle;
-  particle.gait = middle;
   particle.body = bank_[middle].prior->sample(0.25, guess.position_m, guess.heading_rad, random, pose);
   pose = this->pose(particle);
   vision::BodyOutlines outlines;
@@ -251,7 +289,9 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   const FilterStepReport report = filter_->initialize(
       [&](common::Random& random) {
         TrackerParticle p;
-        p.gait = gaits[std::uniform_int_distribution<int>(0, static_cast<int>(gaits.size()) - 1)(random)];
+        const BankGait& gait = bank_[gaits[std::uniform_int_distribution<int>(0, static_cast<int>(gaits.size()) - 1)(random)]];
+        p.target_speed_kmh = gait.speed_kmh;
+        p.target_step_m = gait.step_length_m;
         std::normal_distribution<double> normal(0.0, 1.0);
         const double phase = std::uniform_real_distribution<double>(0.0, 1.0)(random);
         const Eigen::Vector2d at = guess.position_m + guess.position_sd_m * Eigen::Vector2d(normal(random), normal(random));
@@ -263,11 +303,10 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
                              : std::bernoulli_distribution(0.5)(random) ? dynamics::Leg::kLeft : dynamics::Leg::kRight;
         body::BodyPose unused;
         // From the gait's tabulated cycle: the initial search draws initial_oversampling × N.
-        p.body = bank_[p.gait].prior->sample(phase, at, heading, random, unused, stance,
-                                             prior::WalkerPrior::Start::kFromCycle);
+        p.body = gait.prior->sample(phase, at, heading, random, unused, stance, prior::WalkerPrior::Start::kFromCycle);
         return p;
       },
-      [&](TrackerParticle& p, int frame) { return weigh(p, frame, bank_[p.gait].prior->pose(p.body)); }, 0);
+      [&](TrackerParticle& p, int frame) { return weigh(p, frame, bodyPrior().pose(p.body)); }, 0);
   timing_.particles_ms = msSince(particles_at);
   timing_.total_ms = msSince(started_at);
   TrackEstimate e = estimate(report);
@@ -330,14 +369,11 @@ double Tracker::propagate(TrackerParticle& p, int frame, common::Random& random)
   for (size_t i = 0; i < evidence_frames_.size(); ++i)
     if (evidence_frames_[i] == frame) dt = evidence_dt_s_[i];
   const auto t0 = Clock::now();
-  // Speed changes inside a track: after a heel strike the new stride may walk around a
-  // neighbouring gait of the table (its stride samples are drawn from that gait's optimum).
-  const std::vector<int>& neighbours = bank_[p.gait].neighbours;
-  if (p.body.walker.walker.heel_strikes != p.body.walker.stride_of_means && !neighbours.empty() &&
-      std::bernoulli_distribution(options_.gait_change_probability)(random))
-    p.gait = neighbours[std::uniform_int_distribution<int>(0, static_cast<int>(neighbours.size()) - 1)(random)];
+  // Speed changes inside a track: after a heel strike the new stride walks around the
+  // particle's moved target (its stride samples are drawn about that gait).
+  if (p.body.walker.walker.heel_strikes != p.body.walker.stride_of_means) changeGait(p, random);
   body::BodyPose pose;
-  const bool fell = bank_[p.gait].prior->transition(p.body, dt, random, pose).fell;
+  const bool fell = bodyPrior().transition(p.body, dt, random, pose).fell;
   const auto t1 = Clock::now();
   // A walker that fell is no walking person: it gets no weight (it is resampled away).
   const double log_likelihood = fell ? -std::numeric_limits<double>::infinity() : weigh(p, frame, pose);
@@ -372,9 +408,9 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   e.pose = pose(particles[best]);
   e.map_log_likelihood = particles[best].log_likelihood;
   e.lost = loss_.lost();
-  e.speed_kmh = bank_[particles[best].gait].speed_kmh;
+  e.speed_kmh = particles[best].target_speed_kmh;
   e.heading_rad = particles[best].body.placement.value.heading_rad;
-  const prior::BodyPrior& prior = *bank_[particles[best].gait].prior;
+  const prior::BodyPrior& prior = bodyPrior();
   e.walker = particles[best].body.walker.walker;
   e.walker.qdot /= prior.naturalTimeS();
   e.walker.time_in_stride *= prior.naturalTimeS();

@@ -50,8 +50,10 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "ground slope, rad, positive uphill");
   checkRange(problems, "min_gait_speed_kmh", o.min_gait_speed_kmh, 0.0, 20.0,
              "slowest gait of the table the particles may walk, km/h");
-  checkRange(problems, "gait_change_probability", o.gait_change_probability, 0.0, 1.0,
-             "probability that a new stride walks a neighbouring gait");
+  checkRange(problems, "gait_speed_sd_kmh", o.gait_speed_sd_kmh, 0.0, 5.0,
+             "spread of a particle's target speed's step at a heel strike, km/h");
+  checkRange(problems, "gait_step_sd_m", o.gait_step_sd_m, 0.0, 0.5,
+             "spread of a particle's target step length's step at a heel strike, m");
   checkRange(problems, "person_breadth_scale", o.person_breadth_scale, 0.5, 3.0,
              "factor on the torso's and thighs' breadth");
   checkRange(problems, "lost_likelihood_fraction", o.lost_likelihood_fraction, 0.0, 1.0,

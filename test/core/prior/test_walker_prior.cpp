@@ -111,6 +111,39 @@ TEST(WalkerPrior, ControlsCarryTheGaitsOwnDampingsSwingKneeAndTorsoRest) {
   EXPECT_EQ(ran.torso_stiffness, particle.stiffness[kPriorTorso]);
 }
 
+// A change of gait (walkGait) takes effect at the stride it is set in: the springs the prior
+// does not sample are the new gait's at once, and the stride that begins after a heel strike
+// draws its stiffness means and impulse about the new gait's, not the prior's.
+TEST(WalkerPrior, AParticleWalksTheGaitSetAtItsHeelStrike) {
+  const Fixture f;
+  const gait::GaitTable table = gait::loadGaitTable(kTable, test::shippedWalkerModel());
+  const gait::Gait slower = gait::interpolateGait(table, 3.0, 0.6, 0.0);
+  ASSERT_GT(std::abs(slower.controls.springs.hip_stiffness - f.gait.controls.springs.hip_stiffness), 0.01);
+  ASSERT_GT(std::abs(slower.controls.toe_off_impulse - f.gait.controls.toe_off_impulse), 0.01);
+  PriorOptions exact;  // no spread: the stride's means are the gait's, plus the offsets
+  exact.stride_sd.fill(0.0);
+  exact.impulse_scale = 0;
+  const WalkerPrior prior(f.sim, f.gait, exact);
+  common::Random random(5);
+  WalkerParticle p = prior.sample(0.9, random);
+  EXPECT_EQ(p.stride_mean[kPriorHip], f.gait.controls.springs.hip_stiffness + exact.stride_mean_offset[kPriorHip]);
+  const std::uint32_t strikes = p.walker.heel_strikes;
+  for (int i = 0; i < 20 && p.walker.heel_strikes == strikes; ++i) prior.transition(p, 0.05, random);
+  ASSERT_EQ(p.walker.heel_strikes, strikes + 1);
+  walkGait(p, slower);
+  EXPECT_EQ(prior.controls(p).springs.swing_knee_stiffness, slower.controls.springs.swing_knee_stiffness);
+  prior.transition(p, 0.05, random);
+  EXPECT_EQ(p.stride_mean[kPriorHip], slower.controls.springs.hip_stiffness + exact.stride_mean_offset[kPriorHip]);
+  EXPECT_EQ(p.stride_mean[kPriorStanceKnee],
+            slower.controls.springs.stance_knee_stiffness + exact.stride_mean_offset[kPriorStanceKnee]);
+  EXPECT_EQ(p.next_impulse, slower.controls.toe_off_impulse);
+  // Without a change the next stride is the prior's gait's again.
+  WalkerParticle q = prior.sample(0.9, random);
+  for (int i = 0; i < 21 && q.walker.heel_strikes == strikes; ++i) prior.transition(q, 0.05, random);
+  EXPECT_EQ(q.stride_mean[kPriorHip], f.gait.controls.springs.hip_stiffness + exact.stride_mean_offset[kPriorHip]);
+  EXPECT_EQ(q.next_impulse, f.gait.controls.toe_off_impulse);
+}
+
 TEST(WalkerPrior, StrideSamplesFollowTheirDistributions) {
   const Fixture f;
   PriorOptions options;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <iostream>
@@ -65,6 +66,12 @@ TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
   slow.min_gait_speed_kmh = 1.5;
   slow.min_gait_step_m = 0.3;
   EXPECT_EQ(makeTracker(10, 1, 70.0, slow)->gaitCount(), papers + 23);
+  // For a person of another height (the gaits scaled by Froude similarity) too: at 1.65 m the
+  // slowest gait's speed, scaled and back, once fell outside the table by a rounding.
+  for (const double height_m : {1.5, 1.65, 1.9}) {
+    slow.person_height_m = height_m;
+    EXPECT_EQ(makeTracker(10, 1, 70.0, slow)->gaitCount(), papers + 23) << height_m << " m";
+  }
   TrackerOptions none;
   none.min_gait_speed_kmh = 19;
   try {
@@ -94,24 +101,42 @@ TEST(Tracker, TheBreadthScaleBroadensTorsoAndThighsOnly) {
   EXPECT_EQ(wide.foot_length_m, plain.foot_length_m);
 }
 
-// gait_change_probability: at 0 every stride walks the gait its particle started on, at 1 every
-// new stride moves to a neighbouring gait. Started on the 4.5 km/h gaits alone, the MAP
-// particle's gait speed stays 4.5 km/h at 0 and leaves it at 1 (after the first heel strikes).
-TEST(Tracker, GaitChangeProbabilityIsHowOftenAStrideMovesToANeighbouringGait) {
-  auto speeds = [](double probability) {
+// Speed changes: each particle's target gait takes a random step at its heel strikes. At spread
+// 0 every stride walks the gait its particle started on; with a spread the targets move, within
+// the gaits the particles may walk. Started on the 4.5 km/h gaits alone, the MAP particle's
+// target speed stays 4.5 km/h at 0 and leaves it with a spread (after the first heel strikes).
+TEST(Tracker, TargetGaitsRandomWalkAtHeelStrikesWithinTheTablesGaits) {
+  auto speeds = [](double speed_sd_kmh, double step_sd_m, double* slowest, double* fastest) {
     TrackerOptions options;
-    options.gait_change_probability = probability;
+    options.gait_speed_sd_kmh = speed_sd_kmh;
+    options.gait_step_sd_m = step_sd_m;
     const auto tracker = makeTracker(200, 1, 70.0, options);
     const test::RenderedWalk& s = scene();
     InitialGuess guess = coarseStart();
     guess.min_speed_kmh = guess.max_speed_kmh = 4.5;
     std::set<double> seen;
     seen.insert(tracker->start(s.frames[0], 0.0, guess).speed_kmh);
-    for (size_t f = 1; f < s.frames.size(); ++f) seen.insert(tracker->track(s.frames[f], 0.1 * f).speed_kmh);
+    *slowest = 1e9, *fastest = 0;
+    for (size_t f = 1; f < s.frames.size(); ++f) {
+      seen.insert(tracker->track(s.frames[f], 0.1 * f).speed_kmh);
+      for (const TrackerParticle& p : tracker->particles()) {
+        *slowest = std::min(*slowest, p.target_speed_kmh);
+        *fastest = std::max(*fastest, p.target_speed_kmh);
+      }
+    }
     return seen;
   };
-  EXPECT_EQ(speeds(0.0), std::set<double>{4.5});
-  EXPECT_GT(speeds(1.0).size(), 1u);
+  double slowest, fastest;
+  EXPECT_EQ(speeds(0.0, 0.0, &slowest, &fastest), std::set<double>{4.5});
+  EXPECT_EQ(slowest, 4.5);
+  EXPECT_EQ(fastest, 4.5);
+  EXPECT_GT(speeds(1.0, 0.05, &slowest, &fastest).size(), 1u);
+  std::cout << "targets " << slowest << "-" << fastest << " km/h\n";
+  EXPECT_LT(slowest, 4.0);
+  EXPECT_GT(fastest, 5.0);
+  // The default gaits are the paper's grid: 3-7 km/h for the table's 1.75 m person (this one).
+  EXPECT_GE(slowest, 3.0 - 0.05);
+  EXPECT_LE(fastest, 7.0 + 0.05);
 }
 
 // A guard that fails when tracking breaks: 800 particles follow a 2 s walk. Measured 95 mm mean

@@ -31,18 +31,20 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.min_gait_speed_kmh = std::numeric_limits<double>::infinity();
   options.min_gait_step_m = -0.1;
   options.person_breadth_scale = 0.2;
-  options.gait_change_probability = std::numeric_limits<double>::quiet_NaN();
+  options.gait_speed_sd_kmh = std::numeric_limits<double>::quiet_NaN();
+  options.gait_step_sd_m = -0.01;
   options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
   options.initial_oversampling = 0;
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 9u);
+  EXPECT_EQ(problems.size(), 10u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
   EXPECT_TRUE(mentions(problems, "min_gait_speed_kmh = inf"));
   EXPECT_TRUE(mentions(problems, "min_gait_step_m = -0.1"));
   EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
-  EXPECT_TRUE(mentions(problems, "gait_change_probability = nan"));
+  EXPECT_TRUE(mentions(problems, "gait_speed_sd_kmh = nan"));
+  EXPECT_TRUE(mentions(problems, "gait_step_sd_m = -0.01"));
   EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
   EXPECT_TRUE(mentions(problems, "initial_oversampling = 0 is outside [1, 1000]"));
 }

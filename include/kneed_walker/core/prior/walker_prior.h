@@ -95,12 +95,21 @@ void stepPlacement(PlacementState& placement, const PlacementNoise& noise, doubl
 // model's placement, driven by the tracker).
 struct WalkerParticle {
   dynamics::WalkerState walker;
+  // The gait its strides walk around (θ, the optimal impulse ι*, γ; no torque offsets): the
+  // prior's from sample(), or another set by walkGait at a heel strike (a change of speed or step).
+  dynamics::WalkerControls gait;
   std::array<double, kNumPriorStiffnesses> stride_mean{};  // κ̄_j for the current stride
   std::array<double, kNumPriorStiffnesses> stiffness{};    // κ_j(t)
   dynamics::JointTorques noise{};                                    // η_j(t)
   double next_impulse = 0;                                 // ι at the coming heel strike
   std::uint32_t stride_of_means = 0;  // walker.heel_strikes when stride_mean was drawn
 };
+
+// From the particle's next stride on, its strides walk around `gait` (of the same slope): the
+// per-stride stiffness means and the impulse are drawn about its values, and the springs the
+// prior does not sample are its. Called between a heel strike and the next transition, the
+// stride that has just begun walks it.
+void walkGait(WalkerParticle& particle, const gait::Gait& gait);
 
 // The prior walks around gaits that were optimised with its fixed controls held (optimize_gaits
 // --prior-fixed, config/prior_gait_table.yaml): around gaits optimised freely, its fixed values
@@ -118,8 +127,9 @@ gait::Gait priorGait(const gait::GaitTable& table, const dynamics::WalkerSimulat
 
 class WalkerPrior {
  public:
-  // `gait` supplies the means of the stride stiffnesses, the slope and the start state; the
-  // prior keeps its own copy of the simulator (it is small and constant).
+  // `gait` supplies the start state and the gait sampled particles walk around (the means of
+  // the stride stiffnesses, the impulse, the slope); a particle may walk another from a heel
+  // strike on (walkGait). The prior keeps its own copy of the simulator (small and constant).
   WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait::Gait& gait,
               const PriorOptions& options);
 
@@ -133,7 +143,8 @@ class WalkerPrior {
   static constexpr int kCycleStates = 64;
   WalkerParticle sample(double phase, common::Random& random, Start start = Start::kFromStrike) const;
 
-  // s_t ~ p(s_t | s_{t−1}) over dt (natural time units): samples, then simulates.
+  // s_t ~ p(s_t | s_{t−1}) over dt (natural time units): samples, then simulates, around the
+  // particle's gait.
   dynamics::AdvanceReport transition(WalkerParticle& particle, double dt, common::Random& random) const;
 
   // The controls a particle's walker runs with.
@@ -149,7 +160,6 @@ class WalkerPrior {
   dynamics::WalkerSimulator sim_;
   gait::Gait gait_;
   PriorOptions options_;
-  std::array<double, kNumPriorStiffnesses> gait_stiffness_;
   std::array<dynamics::WalkerState, kCycleStates> cycle_;  // the gait's stride at phases k / kCycleStates
 };
 
@@ -157,9 +167,9 @@ class WalkerPrior {
 // gait just after a heel strike with fresh samples and runs the transition frame by frame (dt,
 // natural time) until `strides_per_chain` strides have ended in a heel strike or one in a fall;
 // chains are sampled until `strides` strides have ended either way. A chain's k-th stride (from
-// 0) walks around `stride_priors[min(k, size − 1)]`: one prior walks one gait throughout, one per
-// stride walks a change of speed, the new gait taking over at the heel strike as in the
-// tracker's gait changes.
+// 0) walks around the gait of `stride_priors[min(k, size − 1)]`: one prior walks one gait
+// throughout, one per stride walks a change of speed, the new gait taking over at the heel
+// strike (walkGait) as in the tracker's gait changes.
 struct WalkingFraction {
   int walked = 0;  // strides that ended in a heel strike
   int fell = 0;    // strides that ended in a fall

@@ -52,8 +52,9 @@ InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlan
 
 // One particle.
 struct TrackerParticle {
-  prior::BodyParticle body;
-  int gait = 0;                                   // index into the tracker's gait bank
+  prior::BodyParticle body;  // its walker walks around the gait of its target (body.walker.gait)
+  // The target gait: the person's speed, km/h, and step length, m (TrackerOptions::gait_speed_sd_kmh).
+  double target_speed_kmh = 0, target_step_m = 0;
   vision::BodyImageAxes axes;                     // its parts' image axes at the last frame (for flow)
   std::array<Eigen::Vector3f, body::kNumBodyJoints> joints;  // its joints at the last frame, world, m
   float log_likelihood = 0;                       // of the last frame
@@ -66,7 +67,7 @@ struct TrackEstimate {
   std::array<Eigen::Vector3d, body::kNumBodyJoints> joint_sd_m;  // weighted spread of each joint
   Eigen::Matrix3d waist_covariance_m2 = Eigen::Matrix3d::Zero();
   double heading_rad = 0, heading_sd_rad = 0;
-  double speed_kmh = 0;            // the MAP particle's gait
+  double speed_kmh = 0;            // the MAP particle's target gait's speed, the person's km/h
   // The MAP particle's planar walker (paper §3) in SI units: q rad, q̇ rad/s, time_in_stride s,
   // stance_foot_x m; and the slope of its gait, rad.
   dynamics::WalkerState walker;
@@ -151,6 +152,7 @@ class Tracker {
   bool keepsWholePath() const { return options_.keep_whole_path; }
   double personHeightM() const { return options_.person_height_m; }
   const TrackerTiming& timing() const { return timing_; }
+  // The table's gaits a track's particles start on (its grid points the options allow).
   int gaitCount() const { return static_cast<int>(bank_.size()); }
   // The pose of a particle (world, metres).
   body::BodyPose pose(const TrackerParticle& particle) const;
@@ -164,12 +166,27 @@ class Tracker {
   const body::BodyShape& shape() const;
 
  private:
+  // A grid point's gait: a track's particles start on its stride's tabulated cycle.
   struct BankGait {
     std::unique_ptr<prior::BodyPrior> prior;
     double speed_kmh = 0, step_length_m = 0;  // the person's, by Froude scaling
-    int speed_index = 0, step_index = 0;      // its grid point's
-    std::vector<int> neighbours;  // gaits one grid step away in speed and/or step length
   };
+  // The gaits the particles' targets may move through: the table interpolated at the bank's
+  // slope on a fine lattice of the person's speeds and step lengths over the bank's range, so
+  // that a target's step at a heel strike is a lookup (no allocation on the particles' path).
+  struct GaitLattice {
+    double speed0_kmh = 0, speed_step_kmh = 0, step0_m = 0, step_step_m = 0;
+    int speeds = 0, steps = 0;
+    std::vector<gait::Gait> gaits;  // speeds × steps, speed-major
+    std::vector<char> walkable;     // the point's cell has a feasible gait that weighs
+    // The lattice point nearest (speed, step), or −1 outside the lattice or where not walkable.
+    int at(double speed_kmh, double step_m) const;
+  };
+  // Every particle's transition and pose (a bank gait's prior: they differ only in the gait
+  // their particles start on, and a particle carries the gait it walks).
+  const prior::BodyPrior& bodyPrior() const { return *bank_.front().prior; }
+  // At a heel strike: the particle's target takes its random step and its new stride walks it.
+  void changeGait(TrackerParticle& particle, common::Random& random) const;
   // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround).
   double weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const;
   // A body prior's pose raised onto the ground plane.
@@ -185,6 +202,7 @@ class Tracker {
   TrackerOptions options_;
   vision::LikelihoodOptions likelihood_;
   std::vector<BankGait> bank_;
+  GaitLattice lattice_;
   body::BodyShape shape_;  // the gaits' body shape, with the options' breadth
   vision::BackgroundModel background_;
   vision::AppearanceModel appearance_;

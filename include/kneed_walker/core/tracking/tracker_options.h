@@ -45,11 +45,12 @@ struct TrackerOptions {
   // "The tracker").
   double min_gait_speed_kmh = 3.0;  // km/h, [0, 20]
   double min_gait_step_m = 0.5;     // m, [0, 3]
-  // Speed changes inside a track: the probability that a particle's new stride (at a heel strike)
-  // walks around a neighbouring gait of the table (one grid step in speed and/or step length)
-  // instead of its own. Measured (README "The tracker"): on the synthetic walks 0.6 and 0.9 did no
-  // better than 0.3; on the PETS woman, who speeds up from 2 to 5 km/h, 0.6 did (the demo uses it).
-  double gait_change_probability = 0.3;  // [0, 1]
+  // Speed changes inside a track: each particle walks around a target gait (speed, step length)
+  // of its own, which takes a random step at each of its heel strikes, N(0, sd²) in each, the new
+  // stride walking the table's gait there (interpolated). A step that leaves the gaits the
+  // particles may walk is not taken. 0 and 0: each particle keeps the gait it started on.
+  double gait_speed_sd_kmh = 0.6;  // the person's km/h per heel strike, [0, 5]
+  double gait_step_sd_m = 0.05;    // the person's m per heel strike, [0, 0.5]
   // The projected torso's and thighs' breadth (width and depth) times this: a person in a coat,
   // or with arms swinging beside the torso, which the body model does not have, is broader than
   // its bare torso (Winter's proportions). [0.5, 3]
