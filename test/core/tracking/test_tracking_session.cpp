@@ -251,28 +251,33 @@ const test::RenderedWalk& twoPeople() {
   return walk;
 }
 
-// Two people walking the other way from each other, 7 m apart: with up to three tracks, the
-// session finds both by itself and follows each with a track of its own, and starts no third; a
-// track that loses its person starts again in its slot at the next frame, where they are. So that
-// tracks are lost while their people are in view, a frame below 0.9 of a track's recent median
-// log-likelihood ratio counts towards its loss (lost_likelihood_fraction).
-TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
+// What a session made of two people walking the other way from each other, 7 m apart, with up
+// to three tracks: a frame below 0.9 of a track's recent median log-likelihood ratio counts
+// towards its loss (lost_likelihood_fraction), so that tracks are lost while their people are in
+// view. After input `skip_after` the video skips `skipped` frames (the stamps do not: a camera
+// that dropped them), so that the people jump on.
+struct TwoPeopleRun {
+  std::array<int, 2> followed{0, 0};       // inputs from which a track is within 0.5 m of the person
+  std::array<double, 2> error_m{0, 0};     // the mean waist error over those
+  size_t bodies = 0;
+  int most_tracks = 0, lost = 0, found_again = 0;
+};
+TwoPeopleRun runTwoPeople(size_t skip_after, size_t skipped) {
   const test::RenderedWalk& s = twoPeople();
   SessionOptions options = holding(10);
   options.max_people = 3;
   TrackingSession session(makeTracker(400, false, 0.9), options);
-  std::array<double, 2> error_m{0, 0};
-  std::array<int, 2> followed{0, 0};
+  TwoPeopleRun run;
   std::set<int> bodies;
-  int most_tracks = 0, reacquired = 0;
-  std::set<std::pair<int, int>> lost;  // (frame, body)
-  for (size_t f = 0; f < s.frames.size(); ++f)
-    for (const SessionAnswer& a : session.feed(s.frames[f], 0.1 * f)) {
+  std::set<std::pair<int, int>> lost;  // (input, body)
+  auto shown = [&](size_t input) { return input <= skip_after ? input : input + skipped; };  // the walk's frame
+  for (size_t i = 0; shown(i) < s.frames.size(); ++i)
+    for (const SessionAnswer& a : session.feed(s.frames[shown(i)], 0.1 * i)) {
       for (const PersonAnswer& p : a.people) {
         if (p.ended && p.estimate && p.estimate->lost) lost.insert({a.input, p.body});
         if (p.started && p.message.find("found again where lost") != std::string::npos) {
-          EXPECT_TRUE(lost.count({a.input - 1, p.body})) << "frame " << a.input << ": body " << p.body << " " << p.message;
-          ++reacquired;
+          EXPECT_TRUE(lost.count({a.input - 1, p.body})) << "input " << a.input << ": body " << p.body << " " << p.message;
+          ++run.found_again;
         }
       }
       int tracks = 0;
@@ -283,30 +288,50 @@ TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
         ++tracks;
         bodies.insert(p.body);
         const Eigen::Vector3d waist = p.estimate->pose.joints[body::kWaist];
-        nearest[0] = std::min(nearest[0], (waist - s.walk.frames[a.input].pose.joints[body::kWaist]).norm());
-        nearest[1] = std::min(nearest[1], (waist - s.second->frames[a.input].pose.joints[body::kWaist]).norm());
+        nearest[0] = std::min(nearest[0], (waist - s.walk.frames[shown(a.input)].pose.joints[body::kWaist]).norm());
+        nearest[1] = std::min(nearest[1], (waist - s.second->frames[shown(a.input)].pose.joints[body::kWaist]).norm());
       }
-      most_tracks = std::max(most_tracks, tracks);
+      run.most_tracks = std::max(run.most_tracks, tracks);
       for (int person : {0, 1})
-        if (nearest[person] < 0.5) error_m[person] += nearest[person], ++followed[person];
+        if (nearest[person] < 0.5) run.error_m[person] += nearest[person], ++run.followed[person];
     }
-  std::cout << "bodies used " << bodies.size() << ", at most " << most_tracks << " tracks at once; person 1 followed on "
-            << followed[0] << " frames (mean waist error " << 1000 * error_m[0] / std::max(1, followed[0])
-            << " mm), person 2 on " << followed[1] << " (" << 1000 * error_m[1] / std::max(1, followed[1]) << " mm)\n";
-  EXPECT_EQ(most_tracks, 2);
-  EXPECT_GE(bodies.size(), 2u);
-  std::cout << reacquired << " tracks found again where lost\n";
-  EXPECT_GE(reacquired, 1);
-  // Both are found at frame 5 (heading_frames); of the 21 frames from there each is within
-  // 0.5 m of a track on 19 and 21, 104 and 47 mm off on average, one track found again where lost
-  // (measured with each track's first frame searched with 32 times the particles; with the loss
-  // rule's fraction at 0, no track is lost: 21 and 21 frames, 201 and 47 mm). Before that search,
-  // at 0, the farther person's track was lost at frame 15 and started again at 16 (20 and 20
-  // frames, 263 and 155 mm).
+  for (int person : {0, 1}) run.error_m[person] /= std::max(1, run.followed[person]);
+  run.bodies = bodies.size();
+  run.lost = static_cast<int>(lost.size());
+  std::cout << "bodies used " << run.bodies << ", at most " << run.most_tracks << " tracks at once; person 1 followed on "
+            << run.followed[0] << " inputs (mean waist error " << 1000 * run.error_m[0] << " mm), person 2 on "
+            << run.followed[1] << " (" << 1000 * run.error_m[1] << " mm); " << run.lost << " tracks lost, "
+            << run.found_again << " found again where lost\n";
+  return run;
+}
+
+// The session finds both people by itself and follows each with a track of its own, and starts
+// no third. Both are found at frame 5 (heading_frames); of the 21 frames from there each is within
+// 0.5 m of a track on 21 and 18, 90 and 113 mm off on average, since the particles' target
+// gaits random-walk (2026-12-02; one track lost where nobody was found near, and started afresh,
+// so this run no longer shows a track found again: the next test does). Before, 19 and 21, 104 and 47 mm, one track
+// found again where lost (each track's first frame searched with 32 times the particles; with the
+// loss rule's fraction at 0, no track lost: 21 and 21 frames, 201 and 47 mm); before that search,
+// at 0, the farther person's track was lost at frame 15 and started again at 16.
+TEST(TrackingSession, FindsTwoPeopleAndFollowsEachWithItsOwnTrack) {
+  const TwoPeopleRun run = runTwoPeople(1000, 0);
+  EXPECT_EQ(run.most_tracks, 2);
+  EXPECT_GE(run.bodies, 2u);
   for (int person : {0, 1}) {
-    EXPECT_GE(followed[person], 12) << "person " << person + 1;
-    EXPECT_LT(error_m[person] / std::max(1, followed[person]), 0.3) << "person " << person + 1;
+    EXPECT_GE(run.followed[person], 12) << "person " << person + 1;
+    EXPECT_LT(run.error_m[person], 0.3) << "person " << person + 1;
   }
+}
+
+// A track that loses its person while they are in view starts again in its slot at the next
+// frame, where they are ("found again where lost"). The video skips 4 frames after frame 13:
+// both people jump about half a metre on. Measured (2026-12-02): two tracks lost, one of them
+// found again at the next input; 16 and 9 inputs followed.
+TEST(TrackingSession, ATrackLostWhileItsPersonIsInViewStartsAgainWhereTheyAre) {
+  const TwoPeopleRun run = runTwoPeople(13, 4);
+  EXPECT_GE(run.lost, 1);
+  EXPECT_GE(run.found_again, 1);
+  EXPECT_LE(run.most_tracks, 3);
 }
 
 // A second track started on the person one track already follows merges into it: the newer
