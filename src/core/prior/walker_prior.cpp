@@ -102,10 +102,7 @@ gait::Gait priorGait(const gait::GaitTable& table, const dynamics::WalkerSimulat
   return gait;
 }
 
-void walkGait(WalkerParticle& p, const gait::Gait& gait) {
-  p.gait = gait.controls;
-  p.gait.ground_slope = gait.target.slope;
-}
+void walkGait(WalkerParticle& p, const dynamics::WalkerControls& gait) { p.gait = gait; }
 
 WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait::Gait& gait,
                          const PriorOptions& options)
@@ -114,7 +111,7 @@ WalkerPrior::WalkerPrior(const dynamics::WalkerSimulator& simulator, const gait:
   common::throwIfInvalid("PriorOptions", problems);
   if (!(gait.stride_duration > 0)) throw std::invalid_argument("WalkerPrior needs a simulated gait");
   WalkerParticle on_cycle;
-  walkGait(on_cycle, gait_);
+  walkGait(on_cycle, gait_.controls);
   cycle_[0] = gait_.start;
   for (int k = 1; k < kCycleStates; ++k) {
     cycle_[k] = cycle_[k - 1];
@@ -146,7 +143,7 @@ WalkerParticle WalkerPrior::sample(double phase, common::Random& random, Start s
   const int k = start == Start::kFromCycle ? std::min(kCycleStates - 1, static_cast<int>(phase * kCycleStates)) : 0;
   WalkerParticle p;
   p.walker = cycle_[k];  // cycle_[0] is the stride's start
-  walkGait(p, gait_);
+  walkGait(p, gait_.controls);
   newStride(p, random);
   p.stiffness = p.stride_mean;
   sim_.advance(controls(p), p.walker, (phase - static_cast<double>(k) / kCycleStates) * gait_.stride_duration);
@@ -201,7 +198,7 @@ WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int
       count.walked += report.heel_strikes;
       count.pulling += report.pulling_heel_strikes;
       in_chain += report.heel_strikes;
-      if (report.heel_strikes > 0) walkGait(particle, stride_priors[std::min(in_chain, last)].gait());
+      if (report.heel_strikes > 0) walkGait(particle, stride_priors[std::min(in_chain, last)].gait().controls);
       if (report.fell) {
         ++count.fell;
         fell = true;

@@ -99,7 +99,7 @@ SyntheticWalk synthesizeWalk(const gait::GaitTable& table, const prior::PriorOpt
         const std::uint32_t strikes = particle.walker.walker.heel_strikes;
         fell = prior.transition(particle, frame_s, random, frame.pose).fell;
         if (changing && particle.walker.walker.heel_strikes != strikes)  // the next stride's gait
-          prior::walkGait(particle.walker, gaitAt(std::min(1.0, i * frame_s / o.duration_s)));
+          prior::walkGait(particle.walker, gaitAt(std::min(1.0, i * frame_s / o.duration_s)).controls);
       }
       if (fell) longest_s = std::max(longest_s, (i - 1) * frame_s);
       frame.time_s = i * frame_s;

@@ -99,7 +99,8 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
       const double table_speed_kmh = std::clamp(speed_kmh / froude_speed, grid.speeds_kmh.front(), grid.speeds_kmh.back());
       const double table_step_m =
           std::clamp(step_m / step_scale, grid.step_lengths_m.front(), grid.step_lengths_m.back());
-      lattice_.gaits[k] = gait::interpolateGait(table, table_speed_kmh, table_step_m, grid.slopes_rad[slope], &note);
+      lattice_.gaits[k] =
+          gait::interpolateGait(table, table_speed_kmh, table_step_m, grid.slopes_rad[slope], &note).controls;
       lattice_.walkable[k] = note.nearest < 0;
     }
 }

@@ -130,7 +130,7 @@ TEST(WalkerPrior, AParticleWalksTheGaitSetAtItsHeelStrike) {
   const std::uint32_t strikes = p.walker.heel_strikes;
   for (int i = 0; i < 20 && p.walker.heel_strikes == strikes; ++i) prior.transition(p, 0.05, random);
   ASSERT_EQ(p.walker.heel_strikes, strikes + 1);
-  walkGait(p, slower);
+  walkGait(p, slower.controls);
   EXPECT_EQ(prior.controls(p).springs.swing_knee_stiffness, slower.controls.springs.swing_knee_stiffness);
   prior.transition(p, 0.05, random);
   EXPECT_EQ(p.stride_mean[kPriorHip], slower.controls.springs.hip_stiffness + exact.stride_mean_offset[kPriorHip]);

@@ -105,11 +105,12 @@ struct WalkerParticle {
   std::uint32_t stride_of_means = 0;  // walker.heel_strikes when stride_mean was drawn
 };
 
-// From the particle's next stride on, its strides walk around `gait` (of the same slope): the
-// per-stride stiffness means and the impulse are drawn about its values, and the springs the
-// prior does not sample are its. Called between a heel strike and the next transition, the
-// stride that has just begun walks it.
-void walkGait(WalkerParticle& particle, const gait::Gait& gait);
+// From the particle's next stride on, its strides walk around the gait whose controls are
+// `gait` (Gait::controls, ground slope set, the same slope as the particle's): the per-stride
+// stiffness means and the impulse are drawn about its values, and the springs the prior does
+// not sample are its. Called between a heel strike and the next transition, the stride that has
+// just begun walks it.
+void walkGait(WalkerParticle& particle, const dynamics::WalkerControls& gait);
 
 // The prior walks around gaits that were optimised with its fixed controls held (optimize_gaits
 // --prior-fixed, config/prior_gait_table.yaml): around gaits optimised freely, its fixed values

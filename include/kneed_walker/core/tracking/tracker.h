@@ -177,7 +177,7 @@ class Tracker {
   struct GaitLattice {
     double speed0_kmh = 0, speed_step_kmh = 0, step0_m = 0, step_step_m = 0;
     int speeds = 0, steps = 0;
-    std::vector<gait::Gait> gaits;  // speeds × steps, speed-major
+    std::vector<dynamics::WalkerControls> gaits;  // each point's gait's controls; speeds × steps, speed-major
     std::vector<char> walkable;     // the point's cell has a feasible gait that weighs
     // The lattice point nearest (speed, step), or −1 outside the lattice or where not walkable.
     int at(double speed_kmh, double step_m) const;
