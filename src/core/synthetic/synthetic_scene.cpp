@@ -28,7 +28,7 @@ cv::Scalar scaled(const cv::Scalar& colour, double factor) {
 // Fills a convex polygon given in pixels, anti-aliased, with 1/16 px precision.
 void fillPolygon(cv::Mat& image, const Eigen::Vector2d* pixels, int count, const cv::Scalar& colour) {
   constexpr int kShift = 4;
-  std::array<cv::Point, 2 * vision::kOutlineSamples> points;
+  std::array<cv::Point, vision::kOutlineVertices> points;
   count = std::min(count, static_cast<int>(points.size()));
   for (int i = 0; i < count; ++i)
     points[i] = cv::Point(static_cast<int>(std::lround(pixels[i].x() * (1 << kShift))),
@@ -86,7 +86,7 @@ cv::Mat texturedGround(const vision::Camera& camera, const vision::GroundPlane& 
 void drawPerson(cv::Mat& image, const vision::Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                 const PersonAppearance& appearance) {
   vision::BodyOutlines outlines;
-  vision::projectBodyParts(camera, pose, shape, outlines);
+  vision::projectBodyPartsExactly(camera, pose, shape, outlines);
   const vision::PartAxes axes = vision::partAxes(pose, shape);
   const Eigen::Vector3d eye = camera.centre();
   std::array<int, body::kNumBodyParts> order;

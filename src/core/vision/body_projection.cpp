@@ -11,7 +11,7 @@ namespace {
 // Andrew's monotone chain on a fixed-size point set; writes the hull counter-clockwise (in
 // image coordinates, y down) into `hull` and returns its size. No allocation.
 template <size_t N>
-int convexHull(std::array<Eigen::Vector2d, N> points, std::array<Eigen::Vector2d, N>& hull) {
+int convexHull(std::array<Eigen::Vector2d, N> points, Eigen::Vector2d* hull) {
   std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
   });
@@ -29,7 +29,7 @@ int convexHull(std::array<Eigen::Vector2d, N> points, std::array<Eigen::Vector2d
     chain[k++] = points[i];
   }
   const int size = std::min<int>(k - 1, N);  // the last point repeats the first
-  std::copy(chain.begin(), chain.begin() + size, hull.begin());
+  std::copy(chain.begin(), chain.begin() + size, hull);
   return size;
 }
 
@@ -65,8 +65,67 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
 
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                       BodyOutlines& outlines) {
+  constexpr int K = kOutlineVertices;
   const PartAxes axes = partAxes(pose, shape);
-  // The sample directions around an ellipse, computed once (this runs per particle).
+  // The image directions whose support points make an outline, computed once.
+  using Row = Eigen::Array<float, K, 1>;
+  static const Row direction_x = Eigen::Array<double, K, 1>::LinSpaced(K, 0, 2 * M_PI * (K - 1) / K).cos().cast<float>();
+  static const Row direction_y = Eigen::Array<double, K, 1>::LinSpaced(K, 0, 2 * M_PI * (K - 1) / K).sin().cast<float>();
+  for (int p = 0; p < body::kNumBodyParts; ++p) {
+    PartOutline& outline = outlines[p];
+    const body::PartShape& part = shape.parts[p];
+    const PartFrame frame = partFrame(pose, axes, p);
+    const Eigen::Vector3d across = camera.toCameraDirection(frame.across);
+    const Eigen::Vector3d depth = camera.toCameraDirection(frame.depth);
+    // Each end ellipse's image: the centre's pixel plus S (cos θ, sin θ), S = the camera's
+    // derivative at the centre times the ellipse's two semi-axes in the camera frame. Its
+    // support point in a unit direction n is c + Q n / √(nᵀ Q n) with Q = S Sᵀ, at the
+    // distance n·c + √(nᵀ Q n) along n.
+    std::array<Row, 2> reach, support_x, support_y;
+    outline.visible = true;
+    for (int end = 0; end < 2; ++end) {
+      const Eigen::Vector3d centre = camera.toCamera(end == 0 ? axes.proximal[p] : axes.distal[p]);
+      Eigen::Matrix<double, 3, 2> semi_axes;
+      semi_axes.col(0) = 0.5 * (end == 0 ? part.proximal_width_m : part.distal_width_m) * across;
+      semi_axes.col(1) = 0.5 * (end == 0 ? part.proximal_depth_m : part.distal_depth_m) * depth;
+      Eigen::Matrix<double, 2, 3> jacobian;
+      const double nearest_z = centre.z() - std::sqrt(semi_axes(2, 0) * semi_axes(2, 0) + semi_axes(2, 1) * semi_axes(2, 1));
+      if (nearest_z <= Camera::kMinimumDepthM || !camera.projectFromCamera(centre, outline.ends_px[end], jacobian)) {
+        outline.visible = false;
+        break;
+      }
+      const Eigen::Matrix2d s = jacobian * semi_axes;
+      const Eigen::Matrix2d q = s * s.transpose();
+      // Widened by 0.001 px, so that an ellipse seen edge-on (a segment) has a support point in
+      // every direction.
+      const float q00 = q(0, 0) + 1e-6, q01 = q(0, 1), q11 = q(1, 1) + 1e-6;
+      const float cx = outline.ends_px[end].x(), cy = outline.ends_px[end].y();
+      // Eigen's packet arithmetic: all directions at once, square roots included.
+      const Row qx = q00 * direction_x + q01 * direction_y, qy = q01 * direction_x + q11 * direction_y;
+      const Row spread = (direction_x * qx + direction_y * qy).sqrt();
+      const Row inverse = spread.inverse();
+      reach[end] = direction_x * cx + direction_y * cy + spread;
+      support_x[end] = cx + qx * inverse;
+      support_y[end] = cy + qy * inverse;
+    }
+    outline.size = 0;
+    if (!outline.visible) continue;
+    // The hull's support point in each direction is the farther ellipse's; consecutive
+    // directions can share one.
+    for (int k = 0; k < K; ++k) {
+      const int end = reach[1](k) > reach[0](k) ? 1 : 0;
+      const Eigen::Vector2d point(support_x[end](k), support_y[end](k));
+      if (outline.size == 0 || point != outline.hull[outline.size - 1]) outline.hull[outline.size++] = point;
+    }
+    if (outline.size > 1 && outline.hull[outline.size - 1] == outline.hull[0]) --outline.size;
+    outline.depth_m = camera.depth(0.5 * (axes.proximal[p] + axes.distal[p]));
+  }
+}
+
+void projectBodyPartsExactly(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
+                             BodyOutlines& outlines) {
+  const PartAxes axes = partAxes(pose, shape);
+  // The sample directions around an ellipse, computed once.
   static const auto directions = [] {
     std::array<std::array<double, kOutlineSamples>, 2> cs;
     for (int i = 0; i < kOutlineSamples; ++i) {
@@ -100,7 +159,7 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
         points[end * kOutlineSamples + i] = *pixel;
       }
     }
-    outline.size = outline.visible ? convexHull(points, outline.hull) : 0;
+    outline.size = outline.visible ? convexHull(points, outline.hull.data()) : 0;
     if (outline.visible) {
       for (int end = 0; end < 2; ++end) {
         Eigen::Vector2d sum = Eigen::Vector2d::Zero();

@@ -170,7 +170,15 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       if (o.rows > 0 && o.first_row < end_row && o.first_row + o.rows > s.first_row) occluders[n_occluders++] = &o;
     }
     const PartKind kind = partKind(static_cast<body::BodyPart>(p));
+    const bool part_flow = flow && has_motion[p];
+    // The part's sums in locals (registers), not in the arrays indexed by part.
+    double appearance = 0, motion = 0;
+    int in = 0, out = 0, points = 0;
+    // Rows until the next flow grid row (a multiple of step), counted down: no division per row.
+    int rows_to_grid = ((-s.first_row) % step + step) % step;
     for (int k = 0; k < s.rows; ++k) {
+      const bool grid_row = rows_to_grid == 0;
+      rows_to_grid = grid_row ? step - 1 : rows_to_grid - 1;
       if (s.left[k] >= s.right[k]) continue;
       const int y = s.first_row + k;
       int n_pieces = 1;
@@ -194,16 +202,16 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         n_pieces = n_next;
       }
       const bool row_inside = y >= roi.y && y < roi_bottom;
-      const bool flow_row = flow && has_motion[p] && row_inside && y % step == 0;
+      const bool flow_row = part_flow && row_inside && grid_row;
       for (int i = 0; i < n_pieces; ++i) {
         const int a = pieces[i].begin, b = pieces[i].end;
         const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
         if (row_inside && ca < cb) {
-          appearance_sum[p] += evidence.rowSum(kind, y, ca, cb);
-          inside[p] += cb - ca;
-          outside[p] += (b - a) - (cb - ca);
+          appearance += evidence.rowSum(kind, y, ca, cb);
+          in += cb - ca;
+          out += (b - a) - (cb - ca);
         } else {
-          outside[p] += b - a;
+          out += b - a;
         }
         if (flow_row && ca < cb) {
           const PartOutline& now = outlines[p];
@@ -215,14 +223,19 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
             const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
             const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
                                              flow_scale[p] * from;
-            flow_sum[p] += std::clamp(FlowField::logRatio(*point, static_cast<float>(x - was.real()),
-                                                          static_cast<float>(y - was.imag())),
-                                      -flow_limit, flow_limit);
-            ++flow_count[p];
+            motion += std::clamp(FlowField::logRatio(*point, static_cast<float>(x - was.real()),
+                                                     static_cast<float>(y - was.imag())),
+                                 -flow_limit, flow_limit);
+            ++points;
           }
         }
       }
     }
+    appearance_sum[p] = appearance;
+    flow_sum[p] = motion;
+    inside[p] = in;
+    outside[p] = out;
+    flow_count[p] = points;
   }
   double total = 0;
   for (int p = 0; p < kParts; ++p) {

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+
 #include "kneed_walker/core/optimizer/periodic_gait.h"
 
 namespace kneed_walker::core::vision {
@@ -94,16 +97,74 @@ TEST(BodyProjection, TorsoWidthInPixelsFollowsThePinholeModel) {
   EXPECT_LT(max_x - min_x, 3.0 * expected_px);
 }
 
+// How far a point lies outside a convex outline, pixels (0 inside).
+double distanceOutside(const PartOutline& outline, const Eigen::Vector2d& p) {
+  if (inside(outline, p)) return 0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < outline.size; ++i) {
+    const Eigen::Vector2d a = outline.hull[i], b = outline.hull[(i + 1) % outline.size];
+    const double t = std::clamp((p - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-300), 0.0, 1.0);
+    nearest = std::min(nearest, (a + t * (b - a) - p).norm());
+  }
+  return nearest;
+}
+
+double area(const PartOutline& outline) {
+  double twice = 0;
+  for (int i = 0; i < outline.size; ++i) twice += cross(Eigen::Vector2d::Zero(), outline.hull[i], outline.hull[(i + 1) % outline.size]);
+  return 0.5 * std::abs(twice);
+}
+
+// The likelihood's outlines (each end ellipse mapped by the camera's derivative at its centre)
+// against the exact perspective image (projectBodyPartsExactly, as the synthetic sequences are
+// drawn), for the person where the PETS camera sees the image centre (about 19 m away) and
+// placed 4 m in front of the camera. Both are polygons inscribed in the parts' true outlines,
+// with vertices in different places, so they differ by up to a chord's sagitta.
+TEST(BodyProjection, OutlinesMatchTheExactPerspectiveImage) {
+  for (const double distance_m : {0.0, 4.0}) {
+    Scene scene;
+    if (distance_m > 0) {  // the waist moved onto the optical axis, distance_m from the camera
+      const Eigen::Vector3d target = scene.camera.centre() + distance_m * scene.camera.rotation().row(2).transpose();
+      const Eigen::Vector3d shift = target - scene.pose.joints[body::kWaist];
+      for (auto& joint : scene.pose.joints) joint += shift;
+      for (auto& foot : scene.pose.foot_centres) foot += shift;
+    }
+    BodyOutlines fast, exact;
+    projectBodyParts(scene.camera, scene.pose, scene.shape, fast);
+    projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, exact);
+    double worst_px = 0, worst_area = 0, worst_end_px = 0, height_px = 0;
+    for (int p = 0; p < body::kNumBodyParts; ++p) {
+      ASSERT_TRUE(fast[p].visible && exact[p].visible);
+      for (int i = 0; i < exact[p].size; ++i) worst_px = std::max(worst_px, distanceOutside(fast[p], exact[p].hull[i]));
+      for (int i = 0; i < fast[p].size; ++i) worst_px = std::max(worst_px, distanceOutside(exact[p], fast[p].hull[i]));
+      worst_area = std::max(worst_area, std::abs(area(fast[p]) / area(exact[p]) - 1));
+      for (int end = 0; end < 2; ++end) worst_end_px = std::max(worst_end_px, (fast[p].ends_px[end] - exact[p].ends_px[end]).norm());
+      EXPECT_EQ(fast[p].depth_m, exact[p].depth_m);
+    }
+    for (const auto& outline : exact)
+      for (int i = 0; i < outline.size; ++i) height_px = std::max(height_px, outline.hull[i].y() - exact[body::kHeadPart].hull[0].y());
+    std::cout << (distance_m > 0 ? "4 m away" : "at the image centre") << ": body about " << height_px
+              << " px tall; vertices at most " << worst_px << " px outside the other outline, areas differ by at most "
+              << 100 * worst_area << " %, end centres by " << worst_end_px << " px\n";
+    EXPECT_LT(worst_px, distance_m > 0 ? 6.0 : 1.0);
+    EXPECT_LT(worst_area, 0.1);
+    EXPECT_LT(worst_end_px, distance_m > 0 ? 2.0 : 0.2);
+  }
+}
+
 TEST(BodyProjection, PartsBehindTheCameraAreInvisible) {
   Scene scene;
   const Eigen::Vector3d behind = scene.camera.centre() - 3.0 * scene.camera.rotation().row(2).transpose();
   const Eigen::Vector3d shift = behind - scene.pose.joints[body::kWaist];
   for (auto& joint : scene.pose.joints) joint += shift;
   for (auto& foot : scene.pose.foot_centres) foot += shift;
-  BodyOutlines outlines;
+  BodyOutlines outlines, exact;
   projectBodyParts(scene.camera, scene.pose, scene.shape, outlines);
-  EXPECT_FALSE(outlines[body::kTorsoPart].visible);
-  EXPECT_EQ(outlines[body::kTorsoPart].size, 0);
+  projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, exact);
+  for (const BodyOutlines* o : {&outlines, &exact}) {
+    EXPECT_FALSE((*o)[body::kTorsoPart].visible);
+    EXPECT_EQ((*o)[body::kTorsoPart].size, 0);
+  }
 }
 
 }  // namespace

@@ -70,6 +70,41 @@ TEST(Camera, ProjectionAgreesWithOpenCvForTheRationalModel) {
   expectAgreesWithOpenCv(rational, 2);
 }
 
+// projectFromCamera's derivative against central differences of the projection, at random
+// points in view.
+void expectJacobianMatchesDifferences(const Camera& camera, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> x(-15, 15), y(-15, 15), z(0, 2.5);
+  int checked = 0;
+  double worst = 0;
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3d c = camera.toCamera({x(rng), y(rng), z(rng)});
+    Eigen::Vector2d pixel;
+    Eigen::Matrix<double, 2, 3> jacobian;
+    if (!camera.projectFromCamera(c, pixel, jacobian)) continue;
+    if (pixel.x() < 0 || pixel.x() > camera.width() || pixel.y() < 0 || pixel.y() > camera.height()) continue;
+    EXPECT_LT((pixel - *camera.projectFromCamera(c)).norm(), 1e-12);
+    constexpr double h = 1e-5;  // metres
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3d step = h * Eigen::Vector3d::Unit(axis);
+      const Eigen::Vector2d difference = (*camera.projectFromCamera(c + step) - *camera.projectFromCamera(c - step)) / (2 * h);
+      worst = std::max(worst, (difference - jacobian.col(axis)).norm() / std::max(1.0, difference.norm()));
+    }
+    ++checked;
+  }
+  std::cout << checked << " points in view, worst relative difference " << worst << "\n";
+  EXPECT_GT(checked, 100);
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(Camera, ProjectionDerivativeMatchesDifferences) {
+  const Camera pets = petsCamera();
+  expectJacobianMatchesDifferences(pets, 3);
+  const Camera rational(pets.intrinsics(), {-0.2, 0.05, 0.001, -0.002, 0.01, 0.02, -0.01, 0.003},
+                        pets.rotation(), pets.translation(), 768, 576);
+  expectJacobianMatchesDifferences(rational, 4);
+}
+
 TEST(Camera, GroundPointInvertsProjection) {
   const Camera camera = petsCamera();
   for (const Eigen::Vector2d pixel : {Eigen::Vector2d(100, 500), Eigen::Vector2d(400, 300),

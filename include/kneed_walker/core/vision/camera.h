@@ -54,6 +54,36 @@ class Camera {
     const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
     return Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
   }
+  // The same pixel and its 2×3 derivative with respect to the camera-frame point (the
+  // distortion model's Jacobian chained with the perspective division's); false behind the
+  // camera. The likelihood's outlines use it to map a small ellipse around the point.
+  bool projectFromCamera(const Eigen::Vector3d& c, Eigen::Vector2d& pixel,
+                         Eigen::Matrix<double, 2, 3>& jacobian) const {
+    if (c.z() <= kMinimumDepthM) return false;
+    const double x = c.x() / c.z(), y = c.y() / c.z();
+    const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+    double radial = 1 + k1_ * r2 + k2_ * r4 + k3_ * r6;
+    double radial_d_r2 = k1_ + 2 * k2_ * r2 + 3 * k3_ * r4;  // d radial / d r²
+    if (rational_) {
+      const double denominator = 1 + k4_ * r2 + k5_ * r4 + k6_ * r6;
+      const double denominator_d_r2 = k4_ + 2 * k5_ * r2 + 3 * k6_ * r4;
+      radial_d_r2 = (radial_d_r2 * denominator - radial * denominator_d_r2) / (denominator * denominator);
+      radial /= denominator;
+    }
+    const double xd = x * radial + 2 * p1_ * x * y + p2_ * (r2 + 2 * x * x);
+    const double yd = y * radial + p1_ * (r2 + 2 * y * y) + 2 * p2_ * x * y;
+    pixel = Eigen::Vector2d(k_(0, 0) * xd + k_(0, 2), k_(1, 1) * yd + k_(1, 2));
+    // d(xd, yd) / d(x, y): symmetric off the diagonal.
+    const double xx = radial + 2 * x * x * radial_d_r2 + 2 * p1_ * y + 6 * p2_ * x;
+    const double xy = 2 * x * y * radial_d_r2 + 2 * p1_ * x + 2 * p2_ * y;
+    const double yy = radial + 2 * y * y * radial_d_r2 + 6 * p1_ * y + 2 * p2_ * x;
+    // d(x, y) / dc = [1/z, 0, -x/z; 0, 1/z, -y/z].
+    const double fx_z = k_(0, 0) / c.z(), fy_z = k_(1, 1) / c.z();
+    jacobian << fx_z * xx, fx_z * xy, -fx_z * (xx * x + xy * y),
+                fy_z * xy, fy_z * yy, -fy_z * (xy * x + yy * y);
+    return true;
+  }
+  static constexpr double kMinimumDepthM = 0.01;  // nearer than this along z is behind the camera
 
   // Depth of a world point along the optical axis (camera z), metres.
   double depth(const Eigen::Vector3d& world_m) const { return rotation_.row(2).dot(world_m) + translation_.z(); }
@@ -77,7 +107,6 @@ class Camera {
   int height() const { return height_; }
 
  private:
-  static constexpr double kMinimumDepthM = 0.01;  // nearer than this along z is behind the camera
   Eigen::Matrix3d k_;
   std::vector<double> distortion_;
   double k1_ = 0, k2_ = 0, p1_ = 0, p2_ = 0, k3_ = 0, k4_ = 0, k5_ = 0, k6_ = 0;
