@@ -216,14 +216,13 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         if (flow_row && ca < cb) {
           const PartOutline& now = outlines[p];
           const PartImageAxis& before = (*previous)[p];
-          for (int x = ((ca + step - 1) / step) * step; x < cb; x += step) {
-            const FlowPoint* point = evidence.flow().at(x, y);
-            if (!point) continue;
+          const FlowField::RowPoints grid = evidence.flow().rowPoints(y, ca, cb);
+          for (int i = 0, x = grid.first_x; i < grid.count; ++i, x += step) {
             // Where this point of the part was in the previous frame.
             const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
             const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
                                              flow_scale[p] * from;
-            motion += std::clamp(FlowField::logRatio(*point, static_cast<float>(x - was.real()),
+            motion += std::clamp(FlowField::logRatio(grid.first[i], static_cast<float>(x - was.real()),
                                                      static_cast<float>(y - was.imag())),
                                  -flow_limit, flow_limit);
             ++points;

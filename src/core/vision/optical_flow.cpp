@@ -8,12 +8,6 @@
 
 namespace kneed_walker::core::vision {
 
-float FlowField::logRatio(const FlowPoint& p, float ux, float uy) {
-  const float dx = p.vx - ux, dy = p.vy - uy;
-  const float e2 = p.a00 * dx * dx + 2 * p.a01 * dx * dy + p.a11 * dy * dy;
-  return -2.0f * (std::log1p(e2) - p.log1p_background);
-}
-
 void FlowField::compute(const cv::Mat& previous_grey, const cv::Mat& grey, const cv::Rect& roi,
                         const FlowOptions& o) {
   if (grey.type() != CV_8UC1 || previous_grey.type() != CV_8UC1 || grey.size() != previous_grey.size())

@@ -9,6 +9,8 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace kneed_walker::core::vision {
@@ -36,15 +38,33 @@ class FlowField {
                const FlowOptions& options);
   bool empty() const { return points_.empty(); }
   int step() const { return step_; }
-  // The grid point at image coordinates (x, y), both multiples of step(), or nullptr outside.
-  const FlowPoint* at(int x, int y) const {
-    const int i = x / step_ - first_column_, j = y / step_ - first_row_;
-    if (i < 0 || j < 0 || i >= columns_ || j >= rows_) return nullptr;
-    return &points_[static_cast<size_t>(j) * columns_ + i];
+  // The grid points of image row y (a multiple of step()) at columns [x0, x1): x0 rounded up to
+  // a multiple of step(), the first point, and how many, for walking a span without a division
+  // per point. count 0 when none.
+  struct RowPoints {
+    int first_x = 0, count = 0;
+    const FlowPoint* first = nullptr;
+  };
+  RowPoints rowPoints(int y, int x0, int x1) const {
+    RowPoints r;
+    const int j = y / step_ - first_row_;
+    if (j < 0 || j >= rows_) return r;
+    const int i0 = std::max((x0 + step_ - 1) / step_, first_column_) - first_column_;  // x0 ≥ 0
+    const int i1 = std::min((x1 + step_ - 1) / step_, first_column_ + columns_) - first_column_;
+    if (i0 >= i1) return r;
+    r.first_x = (i0 + first_column_) * step_;
+    r.count = i1 - i0;
+    r.first = &points_[static_cast<size_t>(j) * columns_ + i0];
+    return r;
   }
   // The Student-t log-likelihood ratio of eq. 13 (n = 2) of a predicted motion u against the
   // background's u = 0 at a grid point: −2 (log(1 + e²) − log(1 + e₀²)); the log|Σ| terms cancel.
-  static float logRatio(const FlowPoint& p, float ux, float uy);
+  // Inline: it runs per grid point per particle.
+  static float logRatio(const FlowPoint& p, float ux, float uy) {
+    const float dx = p.vx - ux, dy = p.vy - uy;
+    const float e2 = p.a00 * dx * dx + 2 * p.a01 * dx * dy + p.a11 * dy * dy;
+    return -2.0f * (std::log1p(e2) - p.log1p_background);
+  }
 
  private:
   std::vector<FlowPoint> points_;
