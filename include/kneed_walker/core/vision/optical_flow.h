@@ -10,7 +10,6 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <vector>
 
 namespace kneed_walker::core::vision {
@@ -57,13 +56,11 @@ class FlowField {
     r.first = &points_[static_cast<size_t>(j) * columns_ + i0];
     return r;
   }
-  // The Student-t log-likelihood ratio of eq. 13 (n = 2) of a predicted motion u against the
-  // background's u = 0 at a grid point: −2 (log(1 + e²) − log(1 + e₀²)); the log|Σ| terms cancel.
-  // Inline: it runs per grid point per particle.
-  static float logRatio(const FlowPoint& p, float ux, float uy) {
+  // e² = (v − u)ᵀ A (v − u) of eq. 13 at a grid point, for a predicted motion u (px). Inline:
+  // it runs per grid point per particle.
+  static float squaredError(const FlowPoint& p, float ux, float uy) {
     const float dx = p.vx - ux, dy = p.vy - uy;
-    const float e2 = p.a00 * dx * dx + 2 * p.a01 * dx * dy + p.a11 * dy * dy;
-    return -2.0f * (std::log1p(e2) - p.log1p_background);
+    return p.a00 * dx * dx + 2 * p.a01 * dx * dy + p.a11 * dy * dy;
   }
 
  private:
