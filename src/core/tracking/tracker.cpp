@@ -241,7 +241,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
     throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
   const auto started_at = Clock::now();
-  learnAppearance(bgr, guess);
+  if (!guess.same_person || appearance_.empty()) learnAppearance(bgr, guess);
   FilterOptions filter_options;
   filter_options.num_particles = options_.num_particles;
   filter_options.resample_ess_threshold = options_.resample_ess_threshold;

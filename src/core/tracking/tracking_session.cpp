@@ -271,6 +271,7 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
         }
         if (nearest == found.end()) continue;
         slots_[s].reacquire = foundPersonGuess(nearest->ground_xy_m, lost.heading_rad, 0.6, nearest->height_m);
+        slots_[s].reacquire->same_person = true;
         found.erase(nearest);
         char text[96];
         std::snprintf(text, sizeof text, "; someone is %.2f m away: starting again there at the next frame", best);

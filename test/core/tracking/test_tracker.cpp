@@ -246,6 +246,24 @@ TEST(Tracker, RefusesToStartWithoutABackgroundOrOnAWrongFrame) {
                std::invalid_argument);
 }
 
+// A guess 3 m beside the person covers no pixel the background explains badly: a start there
+// cannot learn the person's colours and is refused; for the person this tracker followed
+// before (InitialGuess::same_person, a lost track found again) it starts with the colours
+// learned then.
+TEST(Tracker, AStartForThePersonFollowedBeforeKeepsTheColoursLearnedThen) {
+  const test::RenderedWalk& s = scene();
+  InitialGuess beside = coarseStart();
+  beside.position_m += Eigen::Vector2d(3.0, 0.0);
+  std::unique_ptr<Tracker> fresh = makeTracker(50, 1);
+  EXPECT_THROW(fresh->start(s.frames[5], 0.5, beside), std::invalid_argument);
+  beside.same_person = true;
+  EXPECT_THROW(fresh->start(s.frames[5], 0.5, beside), std::invalid_argument) << "nothing learned before";
+  std::unique_ptr<Tracker> tracker = makeTracker(50, 1);
+  tracker->start(s.frames[0], 0.0, coarseStart());
+  EXPECT_NO_THROW(tracker->start(s.frames[5], 0.5, beside));
+  EXPECT_TRUE(tracker->started());
+}
+
 TEST(Tracker, GuessFromABoxPutsTheFeetOnTheGroundUnderIt) {
   const test::RenderedWalk& s = scene();
   const body::BodyPose& pose = s.walk.frames[0].pose;

@@ -42,6 +42,10 @@ struct InitialGuess {
   // The person's standing height, m, when known (e.g. from their box on the ground): a session
   // makes the track's tracker for it (TrackingSession); unset, the tracker's person_height_m.
   std::optional<double> person_height_m;
+  // The person this tracker followed before (a lost track found again): start with the colours
+  // learned then instead of learning them from a body placed at the guess, which fails when the
+  // guess sits beside the person (too few pixels the background explains badly).
+  bool same_person = false;
 };
 
 // A guess from a person's box in the image: the feet at the middle of the box's bottom edge on
