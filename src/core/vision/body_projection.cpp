@@ -33,6 +33,15 @@ int convexHull(std::array<Eigen::Vector2d, N> points, Eigen::Vector2d* hull) {
   return size;
 }
 
+// A part's width and depth axes (PartFrame) turned into the camera frame.
+struct CameraAxes {
+  Eigen::Vector3d across, depth;
+};
+CameraAxes cameraAxes(const Camera& camera, const body::BodyPose& pose, const PartAxes& axes, int part) {
+  const PartFrame frame = partFrame(pose, axes, part);
+  return {camera.toCameraDirection(frame.across), camera.toCameraDirection(frame.depth)};
+}
+
 }  // namespace
 
 PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
@@ -74,9 +83,7 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
   for (int p = 0; p < body::kNumBodyParts; ++p) {
     PartOutline& outline = outlines[p];
     const body::PartShape& part = shape.parts[p];
-    const PartFrame frame = partFrame(pose, axes, p);
-    const Eigen::Vector3d across = camera.toCameraDirection(frame.across);
-    const Eigen::Vector3d depth = camera.toCameraDirection(frame.depth);
+    const auto [across, depth] = cameraAxes(camera, pose, axes, p);
     // Each end ellipse's image: the centre's pixel plus S (cos θ, sin θ), S = the camera's
     // derivative at the centre times the ellipse's two semi-axes in the camera frame. Its
     // support point in a unit direction n is c + Q n / √(nᵀ Q n) with Q = S Sᵀ, at the
@@ -139,10 +146,8 @@ void projectBodyPartsExactly(const Camera& camera, const body::BodyPose& pose, c
   for (int p = 0; p < body::kNumBodyParts; ++p) {
     PartOutline& outline = outlines[p];
     const body::PartShape& part = shape.parts[p];
-    const PartFrame frame = partFrame(pose, axes, p);
     // The ellipses' axes in the camera frame: a sample is then 6 multiply-adds from its pixel.
-    const Eigen::Vector3d across = camera.toCameraDirection(frame.across);
-    const Eigen::Vector3d depth = camera.toCameraDirection(frame.depth);
+    const auto [across, depth] = cameraAxes(camera, pose, axes, p);
     std::array<Eigen::Vector2d, 2 * kOutlineSamples> points;
     outline.visible = true;
     for (int end = 0; end < 2 && outline.visible; ++end) {
