@@ -117,7 +117,7 @@ double area(const PartOutline& outline) {
 
 // The likelihood's outlines (each end ellipse mapped by the camera's derivative at its centre)
 // against the exact perspective image (projectBodyPartsExactly, as the synthetic sequences are
-// drawn), for the person where the PETS camera sees the image centre (about 19 m away) and
+// drawn), for the person where the PETS camera sees the image centre (23 m away) and
 // placed 4 m in front of the camera. Both are polygons inscribed in the parts' true outlines,
 // with vertices in different places, so they differ by up to a chord's sagitta.
 TEST(BodyProjection, OutlinesMatchTheExactPerspectiveImage) {
@@ -143,7 +143,8 @@ TEST(BodyProjection, OutlinesMatchTheExactPerspectiveImage) {
     }
     for (const auto& outline : exact)
       for (int i = 0; i < outline.size; ++i) height_px = std::max(height_px, outline.hull[i].y() - exact[body::kHeadPart].hull[0].y());
-    std::cout << (distance_m > 0 ? "4 m away" : "at the image centre") << ": body about " << height_px
+    std::cout << (distance_m > 0 ? "4 m away" : "at the image centre") << ": waist at depth "
+              << scene.camera.depth(scene.pose.joints[body::kWaist]) << " m, body about " << height_px
               << " px tall; vertices at most " << worst_px << " px outside the other outline, areas differ by at most "
               << 100 * worst_area << " %, end centres by " << worst_end_px << " px\n";
     EXPECT_LT(worst_px, distance_m > 0 ? 6.0 : 1.0);

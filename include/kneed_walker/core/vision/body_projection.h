@@ -50,8 +50,9 @@ using BodyOutlines = std::array<PartOutline, body::kNumBodyParts>;
 
 // Projects all parts for the likelihood (per particle: no allocation). Each end ellipse is
 // mapped by the camera's derivative at its centre (exact to first order in the ellipse's size
-// over its depth: the error is below 0.1 px for a person 5 m or more away), so its image is an
-// ellipse; the outline is the two ellipses' support points in kOutlineVertices image directions
+// over its depth; against projectBodyPartsExactly the vertices lie within 0.37 px at 23 m and
+// 2.8 px at 4 m, test_body_projection), so its image is an ellipse; the outline is the two
+// ellipses' support points in kOutlineVertices image directions
 // evenly spread, which lie in order on their convex hull. A part is invisible when any point of
 // either end ellipse is behind the camera.
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
