@@ -74,9 +74,11 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
   // A convex outline in order is two chains from its top to its bottom vertex, one of edges
   // going down, one going up; every row between crosses each chain once. Each edge writes its
   // chain's x on its rows, and a row's span lies between its two chains' x.
+  // The next vertex by a compare, not `% size`: an integer division per edge cost a fifth of
+  // rasterize (perf, bench_tracker).
   for (int i = 0; i < outline.size; ++i) {
     const Eigen::Vector2d& p = outline.hull[i];
-    const Eigen::Vector2d& q = outline.hull[(i + 1) % outline.size];
+    const Eigen::Vector2d& q = outline.hull[i + 1 < outline.size ? i + 1 : 0];
     const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
     const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
     if (r0 > r1) continue;
