@@ -253,17 +253,14 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
           const PartOutline& now = outlines[p];
           const PartImageAxis& before = (*previous)[p];
           const FlowField::RowPoints grid = evidence.flow().rowPoints(y, ca, cb);
-          const double scale_re = flow_scale[p].real(), scale_im = flow_scale[p].imag();
-          const double from_y = y - now.ends_px[0].y();
           for (int i = 0, x = grid.first_x; i < grid.count; ++i, x += step) {
-            // Where this point of the part was in the previous frame: the previous proximal end
-            // plus flow_scale · (the point − the proximal end now), the complex product written
-            // out (std::complex's also tests its result for NaN, per point).
-            const double from_x = x - now.ends_px[0].x();
-            const double was_x = before.ends_px[0].x() + (scale_re * from_x - scale_im * from_y);
-            const double was_y = before.ends_px[0].y() + (scale_re * from_y + scale_im * from_x);
+            // Where this point of the part was in the previous frame.
+            const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
+            const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
+                                             flow_scale[p] * from;
             const FlowPoint& point = grid.first[i];
-            motion.add(FlowField::squaredError(point, static_cast<float>(x - was_x), static_cast<float>(y - was_y)),
+            motion.add(FlowField::squaredError(point, static_cast<float>(x - was.real()),
+                                               static_cast<float>(y - was.imag())),
                        point.log1p_background);
             ++points;
           }
