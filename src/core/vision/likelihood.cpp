@@ -74,8 +74,8 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
   // A convex outline in order is two chains from its top to its bottom vertex, one of edges
   // going down, one going up; every row between crosses each chain once. Each edge writes its
   // chain's x on its rows, and a row's span lies between its two chains' x.
-  // The next vertex by a compare, not `% size`: an integer division per edge cost a fifth of
-  // rasterize (perf, bench_tracker).
+  // The next vertex by a compare, not `% size`, an integer division per edge (rasterize's share
+  // of bench_tracker's perf samples 12.8 -> 11.9 %, its instructions -3 %).
   for (int i = 0; i < outline.size; ++i) {
     const Eigen::Vector2d& p = outline.hull[i];
     const Eigen::Vector2d& q = outline.hull[i + 1 < outline.size ? i + 1 : 0];
