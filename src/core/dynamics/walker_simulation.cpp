@@ -72,6 +72,8 @@ WalkerSimulator::WalkerSimulator(const WalkerModel& model, const SimulationOptio
     throw std::invalid_argument("SimulationOptions.event_time_tolerance must lie in (0, max_step)");
   if (options.max_events_per_advance < 1)
     throw std::invalid_argument("SimulationOptions.max_events_per_advance must be >= 1");
+  if (!(options.max_swing_penetration >= 0))
+    throw std::invalid_argument("SimulationOptions.max_swing_penetration must be >= 0 (infinity: never a fall)");
   if (!(model.gravity > 0 && model.legLength() > 0))
     throw std::invalid_argument("WalkerModel needs gravity > 0 and a positive leg length");
   natural_time_ = std::sqrt(model.legLength() / model.gravity);
@@ -163,6 +165,7 @@ WalkerSimulator::Geometry WalkerSimulator::geometry(const Vector5& q) const {
 bool WalkerSimulator::hasFallen(const WalkerState& s, const Geometry& g) const {
   if (!s.q.allFinite() || !s.qdot.allFinite()) return true;
   return g.hip_height < options_.min_hip_height * model_.legLength() ||
+         g.swing_clearance < -options_.max_swing_penetration * model_.legLength() ||
          s.time_in_stride > options_.max_stride_duration * natural_time_;
 }
 

@@ -199,13 +199,15 @@ double gaitEffort(const dynamics::StrideResult& stride, double toe_off_impulse, 
 
 namespace {
 
-// The stride function the optimiser sees: a landing on a pulling ground is simulated through
-// (not a fall), so that the landing constraint's value goes on smoothly below zero; feasible()
-// refuses such a gait.
+// The stride function the optimiser sees: a landing on a pulling ground and a swing foot
+// through the ground are simulated through (not falls), so that the landing constraint's value
+// goes on smoothly below zero and the scuff penalty sees the whole dip; feasible() refuses a
+// pulling landing.
 dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& proportions,
                                              const GaitOptimizerOptions& options) {
   dynamics::SimulationOptions simulation = options.simulation;
   simulation.fall_at_pulling_landing = false;
+  simulation.max_swing_penetration = std::numeric_limits<double>::infinity();
   return dynamics::WalkerSimulator(dynamics::dimensionlessWalker(proportions), simulation);
 }
 

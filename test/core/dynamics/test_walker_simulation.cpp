@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace kneed_walker::core::dynamics {
@@ -26,9 +27,14 @@ WalkerControls activeControls() {
   return c;
 }
 
+// The mechanics' tests below follow made-up states wherever they go, a swing foot through the
+// ground included (which SimulationOptions::max_swing_penetration makes a fall for walking).
+constexpr double kNoGround = std::numeric_limits<double>::infinity();
+
 TEST(WalkerSimulation, TorquesChangeEnergyByExactlyTheirWork) {
   SimulationOptions fine;
   fine.max_step = 0.004;  // the identity holds to the integrator's tolerance
+  fine.max_swing_penetration = kNoGround;
   const WalkerSimulator sim(kPerson, fine);
   const WalkerControls controls = activeControls();
   WalkerState s;
@@ -99,6 +105,7 @@ TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
   // limits are the subject, they walk on through such landings, so that many strides are seen.
   SimulationOptions through_every_landing;
   through_every_landing.fall_at_pulling_landing = false;
+  through_every_landing.max_swing_penetration = kNoGround;
   const WalkerSimulator sim(kPerson, through_every_landing);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -142,7 +149,9 @@ TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
 }
 
 TEST(WalkerSimulation, AnyFrameIntervalGivesTheSameMotion) {
-  const WalkerSimulator sim(kPerson);
+  SimulationOptions through_the_ground;
+  through_the_ground.max_swing_penetration = kNoGround;
+  const WalkerSimulator sim(kPerson, through_the_ground);
   const WalkerControls controls = activeControls();
   WalkerState start;
   start.q << 0.0, 0.3, 0.3, -0.3, -0.4;
@@ -208,6 +217,41 @@ void expectNoHeelStrikeWhileCrossing(double stance_angle, double swing_guess, bo
 TEST(WalkerSimulation, ASwingFootCrossingTheGroundBehindOrRisingIsNoHeelStrike) {
   expectNoHeelStrikeWhileCrossing(0.25, -0.25, true);    // behind the stance foot
   expectNoHeelStrikeWhileCrossing(-0.25, 0.25, false);   // ahead of it
+}
+
+// A swing foot that scuffs under the ground while passing is ignored (the test above), but one
+// deeper than max_swing_penetration × leg length is a fall: it would never strike the ground
+// from above, and walked on through it. Legs locked, the stance leg 0.35 rad from the vertical,
+// the swing leg behind it and more upright, its sole 0.02 L and 0.05 L under the ground.
+TEST(WalkerSimulation, ASwingFootDeepUnderTheGroundIsAFall) {
+  const WalkerSimulator sim(kPerson);
+  SimulationOptions through_the_ground;
+  through_the_ground.max_swing_penetration = kNoGround;
+  const WalkerSimulator ghost(kPerson, through_the_ground);
+  const KinematicMap& map = sim.map();
+  const double leg_m = kPerson.legLength();
+  auto legs = [&](double swing) {
+    Vector5 q;
+    q << 0, 0.35, 0.35, swing, swing;
+    return q;
+  };
+  for (const double depth_legs : {0.02, 0.05}) {
+    double swing = -0.3;  // Newton's method on the clearance, from where the foot is just under
+    for (int i = 0; i < 50; ++i) {
+      const double h = swingFootClearance(map, legs(swing)) + depth_legs * leg_m;
+      const double slope = (swingFootClearance(map, legs(swing + 1e-7)) + depth_legs * leg_m - h) / 1e-7;
+      swing -= h / slope;
+    }
+    ASSERT_NEAR(swingFootClearance(map, legs(swing)), -depth_legs * leg_m, 1e-12);
+    WalkerState s;
+    s.q = legs(swing);
+    s.qdot.setZero();  // at rest: within the 5 ms advanced the foot stays as deep
+    s.knee_on_limit = {true, true};
+    WalkerState same = s;
+    const bool too_deep = depth_legs > SimulationOptions{}.max_swing_penetration;
+    EXPECT_EQ(sim.advance(WalkerControls{}, s, 0.005).fell, too_deep) << depth_legs << " L under";
+    EXPECT_FALSE(ghost.advance(WalkerControls{}, same, 0.005).fell) << depth_legs << " L under, no ground";
+  }
 }
 
 // The simulator's other rules: a state handed in beyond a knee limit is projected onto it

@@ -67,6 +67,13 @@ struct SimulationOptions {
   // of walking has no phase for. The walker is frozen as it touches. The gait optimiser turns
   // this off, to see its landing constraint go on smoothly below zero.
   bool fall_at_pulling_landing = true;
+  // A swing sole deeper below the ground than this × leg length is a fall. The dynamics ignore
+  // a swing foot that scuffs while passing (McGeer's walkers do), and a foot that went under
+  // the ground there never strikes it (a heel strike is a crossing from above): it would walk on
+  // through the ground, as far as 0.4 m below it, and such a walker is no walking person. The
+  // shipped gaits dip at most 0.0165 L (README "Optimal cyclic gaits"). The gait optimiser
+  // turns this off (infinity), to keep its stride function smooth.
+  double max_swing_penetration = 0.03;
 };
 
 struct AdvanceReport {
