@@ -302,6 +302,9 @@ int main(int argc, char** argv) {
       ->check(FiniteRange(0.0, 100.0));
   app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str()
       ->check(FiniteRange(0.0, 100.0));
+  app.add_option("--contact-weight", likelihood.contact_weight,
+                 "weight of the ground-contact term: the rows just below each foot should be background (0: off)")
+      ->capture_default_str()->check(FiniteRange(0.0, 100.0));
   app.add_option("--flow-min-sd", likelihood.flow.min_sd_px, "floor of the flow's SD, px")->capture_default_str()
       ->check(FiniteRange(0.01, 100.0));
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();

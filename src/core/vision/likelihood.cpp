@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <stdexcept>
 
 namespace kneed_walker::core::vision {
@@ -112,6 +113,32 @@ namespace {
 struct Interval {
   int begin, end;
 };
+using Pieces = std::array<Interval, body::kNumBodyParts + 1>;
+
+// Removes from the row-y pieces [pieces, pieces + n) the row-y spans of `covers`; returns the
+// pieces left (at most one more per cover, up to the array's size).
+int subtractCovers(Pieces& pieces, int n, int y, const std::array<const RowSpans*, body::kNumBodyParts>& covers,
+                   int n_covers, Pieces& scratch) {
+  for (int c = 0; c < n_covers && n > 0; ++c) {
+    const RowSpans& o = *covers[c];
+    const int ko = y - o.first_row;
+    if (ko < 0 || ko >= o.rows || o.left[ko] >= o.right[ko]) continue;
+    const Interval cover{o.left[ko], o.right[ko]};
+    int n_next = 0;
+    for (int i = 0; i < n; ++i) {
+      const Interval& piece = pieces[i];
+      if (cover.end <= piece.begin || cover.begin >= piece.end) {
+        scratch[n_next++] = piece;
+        continue;
+      }
+      if (piece.begin < cover.begin && n_next < static_cast<int>(scratch.size())) scratch[n_next++] = {piece.begin, cover.begin};
+      if (cover.end < piece.end && n_next < static_cast<int>(scratch.size())) scratch[n_next++] = {cover.end, piece.end};
+    }
+    std::copy(scratch.begin(), scratch.begin() + n_next, pieces.begin());
+    n = n_next;
+  }
+  return n;
+}
 
 // Σ over grid points of the Student-t log-likelihood ratio of eq. 13 (n = 2) of a predicted
 // motion against the background's u = 0, −2 (log(1 + e²) − log(1 + e₀²)) clamped to ±limit;
@@ -191,7 +218,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   const int step = flow ? evidence.flow().step() : 1;
   const int roi_right = roi.x + roi.width, roi_bottom = roi.y + roi.height;
   const float flow_limit = static_cast<float>(options.flow_ratio_limit);
-  std::array<Interval, kParts + 1> pieces, next;
+  Pieces pieces, next;
   // Each part over its own rows, less the spans there of the nearer parts whose rows reach them.
   for (int depth_rank = 0; depth_rank < kParts; ++depth_rank) {
     const int p = order[depth_rank];
@@ -217,26 +244,8 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       rows_to_grid = grid_row ? step - 1 : rows_to_grid - 1;
       if (s.left[k] >= s.right[k]) continue;
       const int y = s.first_row + k;
-      int n_pieces = 1;
       pieces[0] = Interval{s.left[k], s.right[k]};
-      for (int c = 0; c < n_occluders && n_pieces > 0; ++c) {
-        const RowSpans& o = *occluders[c];
-        const int ko = y - o.first_row;
-        if (ko < 0 || ko >= o.rows || o.left[ko] >= o.right[ko]) continue;
-        const Interval cover{o.left[ko], o.right[ko]};
-        int n_next = 0;
-        for (int i = 0; i < n_pieces; ++i) {
-          const Interval& piece = pieces[i];
-          if (cover.end <= piece.begin || cover.begin >= piece.end) {
-            next[n_next++] = piece;
-            continue;
-          }
-          if (piece.begin < cover.begin && n_next < kParts + 1) next[n_next++] = {piece.begin, cover.begin};
-          if (cover.end < piece.end && n_next < kParts + 1) next[n_next++] = {cover.end, piece.end};
-        }
-        std::copy(next.begin(), next.begin() + n_next, pieces.begin());
-        n_pieces = n_next;
-      }
+      const int n_pieces = subtractCovers(pieces, 1, y, occluders, n_occluders, next);
       const bool row_inside = y >= roi.y && y < roi_bottom;
       const bool flow_row = part_flow && row_inside && grid_row;
       for (int i = 0; i < n_pieces; ++i) {
@@ -273,7 +282,54 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     outside[p] = out;
     flow_count[p] = points;
   }
+  // Ground contact: the rows below each foot, as many as the foot's outline has, over its
+  // columns and less any part's pixels there, should be background; their average foot log
+  // ratio counts against the body (its negative for the body). A body too far away along the
+  // camera's line of sight stands inside the person's silhouette, its feet on the person's
+  // shins, where the parts' own averages lose little.
+  std::array<double, 2> contact{};
+  std::array<bool, 2> has_contact{};
+  if (options.contact_weight > 0) {
+    std::array<const RowSpans*, kParts> body_spans;
+    int n_body = 0;
+    for (int p = 0; p < kParts; ++p)
+      if (spans[p].rows > 0) body_spans[n_body++] = &spans[p];
+    for (int side = 0; side < 2; ++side) {
+      const RowSpans& foot = spans[side == 0 ? body::kLeftFootPart : body::kRightFootPart];
+      int left = std::numeric_limits<int>::max(), right = std::numeric_limits<int>::min();
+      for (int k = 0; k < foot.rows; ++k) {
+        if (foot.left[k] >= foot.right[k]) continue;
+        left = std::min(left, foot.left[k]);
+        right = std::max(right, foot.right[k]);
+      }
+      if (left >= right) continue;
+      double sum = 0;
+      int in = 0, out = 0;
+      const int first = foot.first_row + foot.rows;
+      for (int y = first; y < first + std::max(2, foot.rows); ++y) {
+        pieces[0] = Interval{left, right};
+        const int n_pieces = subtractCovers(pieces, 1, y, body_spans, n_body, next);
+        const bool row_inside = y >= roi.y && y < roi_bottom;
+        for (int i = 0; i < n_pieces; ++i) {
+          const int a = pieces[i].begin, b = pieces[i].end;
+          const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
+          if (row_inside && ca < cb) {
+            sum += evidence.rowSum(kFootKind, y, ca, cb);
+            in += cb - ca;
+            out += (b - a) - (cb - ca);
+          } else {
+            out += b - a;
+          }
+        }
+      }
+      if (in + out < options.min_part_pixels) continue;
+      contact[side] = (sum + options.outside_ratio * out) / (in + out);
+      has_contact[side] = true;
+    }
+  }
   double total = 0;
+  for (int side = 0; side < 2; ++side)
+    if (has_contact[side]) total -= options.contact_weight * contact[side];
   for (int p = 0; p < kParts; ++p) {
     const int pixels = inside[p] + outside[p];
     PartScore score;
@@ -287,6 +343,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       score.flow = flow_sum[p] / flow_count[p];
       total += options.flow_weight * score.flow;
     }
+    if (p == body::kLeftFootPart || p == body::kRightFootPart) score.contact = contact[p == body::kLeftFootPart ? 0 : 1];
     if (scores) (*scores)[p] = score;
   }
   return total;
