@@ -116,8 +116,10 @@ struct Interval {
 using Pieces = std::array<Interval, body::kNumBodyParts + 1>;
 
 // Removes from the row-y pieces [pieces, pieces + n) the row-y spans of `covers`; returns the
-// pieces left (at most one more per cover, up to the array's size).
-int subtractCovers(Pieces& pieces, int n, int y, const std::array<const RowSpans*, body::kNumBodyParts>& covers,
+// pieces left (at most one more per cover, up to the array's size). Always inlined: called per
+// body row, as a function it cost the likelihood 8.5 % more instructions (callgrind,
+// bench_tracker 500 particles).
+__attribute__((always_inline)) inline int subtractCovers(Pieces& pieces, int n, int y, const std::array<const RowSpans*, body::kNumBodyParts>& covers,
                    int n_covers, Pieces& scratch) {
   for (int c = 0; c < n_covers && n > 0; ++c) {
     const RowSpans& o = *covers[c];
@@ -139,6 +141,27 @@ int subtractCovers(Pieces& pieces, int n, int y, const std::array<const RowSpans
   }
   return n;
 }
+
+// A part kind's log ratios over row pieces: the pixels inside the evidence's region summed, the
+// rest counted (each scores LikelihoodOptions::outside_ratio).
+struct PixelTally {
+  double sum = 0;
+  int inside = 0, outside = 0;
+  // Adds row y's piece; returns its columns inside the region (begin >= end if none).
+  Interval add(const FrameEvidence& evidence, PartKind kind, int y, bool row_inside, const Interval& piece) {
+    const cv::Rect& roi = evidence.roi();
+    const Interval clipped{std::max(piece.begin, roi.x), std::min(piece.end, roi.x + roi.width)};
+    if (row_inside && clipped.begin < clipped.end) {
+      sum += evidence.rowSum(kind, y, clipped.begin, clipped.end);
+      inside += clipped.end - clipped.begin;
+      outside += (piece.end - piece.begin) - (clipped.end - clipped.begin);
+      return clipped;
+    }
+    outside += piece.end - piece.begin;
+    return Interval{0, 0};
+  }
+  int pixels() const { return inside + outside; }
+};
 
 // Σ over grid points of the Student-t log-likelihood ratio of eq. 13 (n = 2) of a predicted
 // motion against the background's u = 0, −2 (log(1 + e²) − log(1 + e₀²)) clamped to ±limit;
@@ -216,7 +239,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   std::array<int, kParts> inside{}, outside{}, flow_count{};
   const cv::Rect roi = evidence.roi();
   const int step = flow ? evidence.flow().step() : 1;
-  const int roi_right = roi.x + roi.width, roi_bottom = roi.y + roi.height;
+  const int roi_bottom = roi.y + roi.height;
   const float flow_limit = static_cast<float>(options.flow_ratio_limit);
   Pieces pieces, next;
   // Each part over its own rows, less the spans there of the nearer parts whose rows reach them.
@@ -234,9 +257,9 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     const PartKind kind = partKind(static_cast<body::BodyPart>(p));
     const bool part_flow = flow && has_motion[p];
     // The part's sums in locals (registers), not in the arrays indexed by part.
-    double appearance = 0;
+    PixelTally appearance;
     FlowRatioSum motion(flow_limit);
-    int in = 0, out = 0, points = 0;
+    int points = 0;
     // Rows until the next flow grid row (a multiple of step), counted down: no division per row.
     int rows_to_grid = ((-s.first_row) % step + step) % step;
     for (int k = 0; k < s.rows; ++k) {
@@ -249,15 +272,8 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       const bool row_inside = y >= roi.y && y < roi_bottom;
       const bool flow_row = part_flow && row_inside && grid_row;
       for (int i = 0; i < n_pieces; ++i) {
-        const int a = pieces[i].begin, b = pieces[i].end;
-        const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
-        if (row_inside && ca < cb) {
-          appearance += evidence.rowSum(kind, y, ca, cb);
-          in += cb - ca;
-          out += (b - a) - (cb - ca);
-        } else {
-          out += b - a;
-        }
+        const Interval seen = appearance.add(evidence, kind, y, row_inside, pieces[i]);
+        const int ca = seen.begin, cb = seen.end;
         if (flow_row && ca < cb) {
           const PartOutline& now = outlines[p];
           const PartImageAxis& before = (*previous)[p];
@@ -276,10 +292,10 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         }
       }
     }
-    appearance_sum[p] = appearance;
+    appearance_sum[p] = appearance.sum;
     flow_sum[p] = motion.total();
-    inside[p] = in;
-    outside[p] = out;
+    inside[p] = appearance.inside;
+    outside[p] = appearance.outside;
     flow_count[p] = points;
   }
   // Ground contact: the rows below each foot, as many as the foot's outline has, over its
@@ -303,27 +319,16 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         right = std::max(right, foot.right[k]);
       }
       if (left >= right) continue;
-      double sum = 0;
-      int in = 0, out = 0;
+      PixelTally below;
       const int first = foot.first_row + foot.rows;
       for (int y = first; y < first + std::max(2, foot.rows); ++y) {
         pieces[0] = Interval{left, right};
         const int n_pieces = subtractCovers(pieces, 1, y, body_spans, n_body, next);
         const bool row_inside = y >= roi.y && y < roi_bottom;
-        for (int i = 0; i < n_pieces; ++i) {
-          const int a = pieces[i].begin, b = pieces[i].end;
-          const int ca = std::max(a, roi.x), cb = std::min(b, roi_right);
-          if (row_inside && ca < cb) {
-            sum += evidence.rowSum(kFootKind, y, ca, cb);
-            in += cb - ca;
-            out += (b - a) - (cb - ca);
-          } else {
-            out += b - a;
-          }
-        }
+        for (int i = 0; i < n_pieces; ++i) below.add(evidence, kFootKind, y, row_inside, pieces[i]);
       }
-      if (in + out < options.min_part_pixels) continue;
-      contact[side] = (sum + options.outside_ratio * out) / (in + out);
+      if (below.pixels() < options.min_part_pixels) continue;
+      contact[side] = (below.sum + options.outside_ratio * below.outside) / below.pixels();
       has_contact[side] = true;
     }
   }
