@@ -25,6 +25,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <optional>
 
@@ -61,6 +62,42 @@ double gridDistance(const kw::gait::GaitGrid& grid, int a, int b) {
   double d = 0;
   for (int i = 0; i < 3; ++i) d += (ca[i] - cb[i]) * (ca[i] - cb[i]);
   return std::sqrt(d);
+}
+
+// On --resume with new grid axes, each of the table's axis values that is not on the new axis
+// drops the table's gaits there. A value that misses one of the table's by a rounding (0.075
+// given for the table's 0.0750491578 rad, 4.3°) would drop them unasked and solve them all
+// again, for minutes or hours: refused, naming both values. A value left out on purpose is
+// reported with the feasible gaits it drops. Returns false after a refusal.
+bool checkResumedAxis(const char* option, const std::vector<double>& given, const kw::gait::GaitTable& table,
+                      int axis) {
+  if (given.empty()) return true;
+  const kw::gait::GaitGrid& grid = table.grid;
+  const std::vector<double>& old_axis =
+      axis == 0 ? grid.speeds_kmh : axis == 1 ? grid.step_lengths_m : grid.slopes_rad;
+  constexpr double kSame = 1e-9, kRounding = 1e-3;  // as gait::regridded matches; km/h, m or rad
+  for (size_t j = 0; j < old_axis.size(); ++j) {
+    const double y = old_axis[j];
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const double x : given)
+      if (std::abs(x - y) < std::abs(nearest - y)) nearest = x;
+    const double miss = std::abs(nearest - y);
+    if (miss <= kSame * std::max(1.0, std::abs(y))) continue;
+    int feasible = 0;
+    for (int i = 0; i < grid.size(); ++i)
+      feasible += table.entries[i].feasible && grid.cell(i)[axis] == static_cast<int>(j);
+    if (miss < kRounding) {
+      std::fprintf(stderr,
+                   "optimize_gaits: %s: %.10g is not the table's %.17g (they differ by %.2g): give the table's "
+                   "value to keep its %d feasible gaits there, or one at least %g from it to solve a new axis value\n",
+                   option, nearest, y, miss, feasible, kRounding);
+      return false;
+    }
+    if (feasible > 0)
+      std::fprintf(stderr, "optimize_gaits: %s leaves out the table's %.17g: its %d feasible gaits are dropped\n", option,
+                   y, feasible);
+  }
+  return true;
 }
 
 void writeAtomically(const std::string& path, const kw::gait::GaitTable& table) {
@@ -204,6 +241,9 @@ int run(int argc, char** argv) {
   };
   if (resume && std::filesystem::exists(out)) {
     table = kw::gait::loadGaitTable(out, proportions);
+    if (!checkResumedAxis("--speeds", speeds_kmh, table, 0) || !checkResumedAxis("--step-lengths", step_lengths_m, table, 1) ||
+        !checkResumedAxis("--slopes", slopes_rad, table, 2))
+      return 1;
     table = kw::gait::regridded(table, requestedGrid(table.grid));
     if (prior_fixed && !table.fixed)
       throw std::invalid_argument(out + " was optimised freely: --prior-fixed cannot resume it");
