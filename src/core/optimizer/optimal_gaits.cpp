@@ -202,7 +202,7 @@ namespace {
 // The stride function the optimiser sees: a landing on a pulling ground and a swing foot
 // through the ground are simulated through (not falls), so that the landing constraint's value
 // goes on smoothly below zero and the scuff penalty sees the whole dip; feasible() refuses a
-// pulling landing.
+// pulling landing and a swing through the ground that the runtime's simulator calls a fall.
 dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& proportions,
                                              const GaitOptimizerOptions& options) {
   dynamics::SimulationOptions simulation = options.simulation;
@@ -211,8 +211,10 @@ dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& pr
   return dynamics::WalkerSimulator(dynamics::dimensionlessWalker(proportions), simulation);
 }
 
-// Fills in the figures of a gait whose stride has been simulated from its start.
-void measure(OptimalGait& gait, const GaitOptimizerOptions& options) {
+// Fills in the figures of a gait whose stride has been simulated from its start; `runtime`
+// simulates it again as the prior does (options.simulation unchanged).
+void measure(OptimalGait& gait, const dynamics::WalkerSimulator& runtime, const GaitOptimizerOptions& options) {
+  gait.walks_at_runtime = runtime.stride(gait.controls, gait.start).completed;
   const gait::GaitTarget& target = gait.target;
   gait.effort = gaitEffort(gait.stride, gait.controls.toe_off_impulse, options.weights);
   gait.periodicity_residual =
@@ -226,7 +228,8 @@ void measure(OptimalGait& gait, const GaitOptimizerOptions& options) {
 }
 
 // One SLSQP solve in the knee modes of `start`, then a Newton polish of x0.
-OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::GaitTarget& target,
+OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const dynamics::WalkerSimulator& runtime,
+                              const gait::GaitTarget& target,
                               const gait::Gait& start, const GaitOptimizerOptions& options) {
   const GaitCoordinates coordinates(kneeModes(start.start));
   GaitProblem problem(sim, target, coordinates, options);
@@ -271,7 +274,7 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::
     result.start = polished.start;
     result.stride = polished.stride;
   }
-  measure(result, options);
+  measure(result, runtime, options);
   result.evaluations = problem.evaluations();
   return result;
 }
@@ -281,7 +284,8 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const gait::
 OptimalGait optimizeGait(const dynamics::BodyProportions& proportions, const gait::GaitTarget& target,
                          const gait::Gait& start, const GaitOptimizerOptions& options) {
   const dynamics::WalkerSimulator sim = optimiserSimulator(proportions, options);
-  OptimalGait result = optimizeInPattern(sim, target, start, options);
+  const dynamics::WalkerSimulator runtime(dynamics::dimensionlessWalker(proportions), options.simulation);
+  OptimalGait result = optimizeInPattern(sim, runtime, target, start, options);
   // Which knees stay locked through heel strike is a property of the gait (a stance knee that
   // flexes right at contact is not locked): when the solution ends in other knee modes than it
   // started in, solve again in those.
@@ -290,7 +294,7 @@ OptimalGait optimizeGait(const dynamics::BodyProportions& proportions, const gai
     gait::Gait restart = result;
     restart.start = result.stride.end;
     restart.start.stance_foot_x = 0;
-    OptimalGait again = optimizeInPattern(sim, target, restart, options);
+    OptimalGait again = optimizeInPattern(sim, runtime, target, restart, options);
     again.evaluations += result.evaluations;
     if (again.feasible() || again.periodicity_residual < result.periodicity_residual)
       result = again;
@@ -391,10 +395,11 @@ OptimalGait seedGait(const dynamics::BodyProportions& proportions, const gait::G
 OptimalGait simulatedGait(const dynamics::BodyProportions& proportions, const gait::Gait& gait,
                           const GaitOptimizerOptions& options) {
   const dynamics::WalkerSimulator sim = optimiserSimulator(proportions, options);
+  const dynamics::WalkerSimulator runtime(dynamics::dimensionlessWalker(proportions), options.simulation);
   OptimalGait result;
   static_cast<gait::Gait&>(result) = gait;
   result.stride = sim.stride(gait.controls, gait.start);
-  measure(result, options);
+  measure(result, runtime, options);
   return result;
 }
 

@@ -54,6 +54,31 @@ const gait::GaitTableEntry& entryAt(const gait::GaitTable& table, const gait::Ga
   throw std::invalid_argument("no such grid point");
 }
 
+// A gait is feasible only if the runtime's simulator walks it: the optimiser's own lets the
+// swing sole pass through the ground, the prior's calls a sole deeper than
+// max_swing_penetration a fall. A shipped gait that dips 0.005 L or more while passing the
+// stance foot is feasible with the default 0.03 L and not with a limit of 0.004 L.
+TEST(OptimalGaits, AGaitTheRuntimeSimulatorCallsAFallIsNotFeasible) {
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  const dynamics::WalkerSimulator runtime(dynamics::dimensionlessWalker(table.body));
+  const gait::GaitTableEntry* scraping = nullptr;
+  for (const auto& e : table.entries)
+    if (e.feasible && runtime.stride(e.gait.controls, e.gait.start).integrals.passing_clearance < -0.005) {
+      scraping = &e;
+      break;
+    }
+  ASSERT_NE(scraping, nullptr) << "no shipped gait dips 0.005 L";
+  const OptimalGait as_shipped = simulatedGait(table.body, scraping->gait);
+  EXPECT_TRUE(as_shipped.walks_at_runtime);
+  EXPECT_TRUE(as_shipped.feasible());
+  GaitOptimizerOptions strict;
+  strict.simulation.max_swing_penetration = 0.004;
+  const OptimalGait strictly = simulatedGait(table.body, scraping->gait, strict);
+  EXPECT_TRUE(strictly.stride.completed);  // the optimiser's stride function walks through
+  EXPECT_FALSE(strictly.walks_at_runtime);
+  EXPECT_FALSE(strictly.feasible());
+}
+
 // The landing inequality beside eq. 10 is active in the shipped table: uphill (3.5 km/h, 0.5 m
 // steps, +4.3°) the cheapest gait pushes off so hard that its landing would need the ground to
 // pull (the table before the constraint had it landing at -0.027), and the shipped gait lands
@@ -63,7 +88,7 @@ const gait::GaitTableEntry& entryAt(const gait::GaitTable& table, const gait::Ga
 // from the constraint, stalls. The table tool's continuation handles those.)
 TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
   const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
-  const gait::GaitTarget uphill = table.grid.target(3.5, 0.5, table.grid.slopes_rad.back());
+  const gait::GaitTarget uphill = table.grid.target(3.5, 0.5, 4.3 * M_PI / 180);
   const gait::GaitTableEntry& shipped = entryAt(table, uphill);
   ASSERT_TRUE(shipped.feasible);
   const GaitOptimizerOptions bounded;

@@ -54,10 +54,17 @@ struct OptimalGait : gait::Gait {
   double step_length_error = 0;     // relative |L − ℓ| / ℓ
   int nlopt_result = 0;             // nlopt::result code of the last solve
   int evaluations = 0;              // strides simulated
-  // Periodic, on target, and landing on a ground that pushes (HeelStrike::physical()).
+  // The stride also completes with GaitOptimizerOptions::simulation as given, as the prior and
+  // the tracker simulate it: the optimiser's own stride function lets the swing sole pass
+  // through the ground (to stay smooth), theirs calls a sole deeper than
+  // SimulationOptions::max_swing_penetration a fall (11 gaits of the ±10° tables, 0.015–0.045 L
+  // below the ground as they pass the stance foot, were feasible without this).
+  bool walks_at_runtime = false;
+  // Periodic, on target, landing on a ground that pushes (HeelStrike::physical()), and walked
+  // by the runtime's simulator.
   bool feasible() const {
     return stride.completed && !stride.pulling_heel_strike && periodicity_residual < 1e-6 &&
-           speed_error < 0.01 && step_length_error < 0.01;
+           speed_error < 0.01 && step_length_error < 0.01 && walks_at_runtime;
   }
 };
 
