@@ -442,6 +442,9 @@ int run(int argc, char** argv) {
     for (int w = begin; w < end; ++w) worker();
   }, 1);
 
+  // Written here too: a resume that solved no point may still have re-marked stale gaits or
+  // regridded the table, and the workers only write after solving one.
+  writeAtomically(out, table);
   int feasible = 0, unreached = 0;
   for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;
   std::fprintf(stderr, "%soptimize_gaits: %d of %d gaits feasible, %d unreached, in %s on %d threads; wrote %s\n",
