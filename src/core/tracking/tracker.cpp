@@ -42,22 +42,35 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   common::throwIfInvalid("tracker options", validate(options));
   prior::requirePriorTable(table, prior_options);
   // The gaits the particles start on: the table's feasible gaits at the slope nearest the
-  // ground's, as fast and long-stepped as the options ask at least, scaled to the person by
-  // Froude similarity.
+  // ground's that has any, as fast and long-stepped as the options ask at least, scaled to the
+  // person by Froude similarity. (The prior's table has no gait uphill beyond 4.3°: on a steeper
+  // climb the particles walk the 4.3° gaits, as on the tables that stopped there.)
   const gait::GaitGrid& grid = table.grid;
-  int slope = 0;
-  for (int s = 1; s < static_cast<int>(grid.slopes_rad.size()); ++s)
-    if (std::abs(grid.slopes_rad[s] - options.ground_slope_rad) < std::abs(grid.slopes_rad[slope] - options.ground_slope_rad))
+  auto startsOn = [&](int i) {
+    const auto cell = grid.cell(i);
+    return table.entries[i].feasible && grid.speeds_kmh[cell[0]] >= options.min_gait_speed_kmh &&
+           grid.step_lengths_m[cell[1]] >= options.min_gait_step_m;
+  };
+  int slope = -1;
+  for (int s = 0; s < static_cast<int>(grid.slopes_rad.size()); ++s) {
+    bool any = false;
+    for (int i = 0; i < grid.size() && !any; ++i) any = grid.cell(i)[2] == s && startsOn(i);
+    if (any && (slope < 0 || std::abs(grid.slopes_rad[s] - options.ground_slope_rad) <
+                                 std::abs(grid.slopes_rad[slope] - options.ground_slope_rad)))
       slope = s;
+  }
+  if (slope < 0)
+    throw std::invalid_argument("the prior's gait table has no feasible gait at any slope from " +
+                                std::to_string(options.min_gait_speed_kmh) + " km/h and " +
+                                std::to_string(options.min_gait_step_m) + " m steps");
+  gait_slope_rad_ = grid.slopes_rad[slope];
   const dynamics::WalkerSimulator simulator(dynamics::dimensionlessWalker(table.body));
   const double leg_m = table.body.leg_length_per_height * options.person_height_m;
   const double froude_speed = std::sqrt(leg_m / grid.referenceLegLength());
   const double step_scale = leg_m / grid.referenceLegLength();
   for (int i = 0; i < grid.size(); ++i) {
     const auto cell = grid.cell(i);
-    if (cell[2] != slope || !table.entries[i].feasible) continue;
-    if (grid.speeds_kmh[cell[0]] < options.min_gait_speed_kmh || grid.step_lengths_m[cell[1]] < options.min_gait_step_m)
-      continue;
+    if (cell[2] != slope || !startsOn(i)) continue;
     BankGait gait;
     gait.prior = std::make_unique<prior::BodyPrior>(
         prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
@@ -66,10 +79,6 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     gait.step_length_m = grid.step_lengths_m[cell[1]] * step_scale;
     bank_.push_back(std::move(gait));
   }
-  if (bank_.empty())
-    throw std::invalid_argument("the prior's gait table has no feasible gait at the ground's slope from " +
-                                std::to_string(options.min_gait_speed_kmh) + " km/h and " +
-                                std::to_string(options.min_gait_step_m) + " m steps");
   shape_ = bank_.front().prior->shape();
   for (const body::BodyPart part : {body::kTorsoPart, body::kLeftThighPart, body::kRightThighPart}) {
     body::PartShape& p = shape_.parts[part];

@@ -78,7 +78,22 @@ TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
     makeTracker(10, 1, 70.0, none);
     FAIL() << "a range without gaits was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("no feasible gait at the ground's slope from 19"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no feasible gait at any slope from 19"), std::string::npos) << e.what();
+  }
+}
+
+// The particles walk the gaits of the table's slope nearest the ground's that has gaits: the
+// prior's table reaches 10° downhill but has none uphill beyond 4.3°, so a 7° or 10° climb
+// walks the 4.3° gaits, and a 6° descent the 7.16° ones.
+TEST(Tracker, WalksTheNearestSlopeThatHasGaits) {
+  const double deg = M_PI / 180;
+  for (const auto& [ground_deg, gait_deg] :
+       {std::pair<double, double>{0, 0}, {4.3, 4.3}, {7, 4.3}, {10, 4.3}, {-6, -0.125 / deg}, {-10, -10}}) {
+    TrackerOptions options;
+    options.ground_slope_rad = ground_deg * deg;
+    const auto tracker = makeTracker(10, 1, 70.0, options);
+    EXPECT_NEAR(tracker->gaitSlopeRad(), gait_deg * deg, 1e-12) << ground_deg << "°";
+    EXPECT_GT(tracker->gaitCount(), 0) << ground_deg << "°";
   }
 }
 

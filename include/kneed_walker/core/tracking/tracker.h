@@ -158,6 +158,8 @@ class Tracker {
   const TrackerTiming& timing() const { return timing_; }
   // The table's gaits a track's particles start on (its grid points the options allow).
   int gaitCount() const { return static_cast<int>(bank_.size()); }
+  // The slope of those gaits, rad: the table's nearest the ground's that has any.
+  double gaitSlopeRad() const { return gait_slope_rad_; }
   // The pose of a particle (world, metres).
   body::BodyPose pose(const TrackerParticle& particle) const;
   // Its parts' image outlines.
@@ -206,6 +208,7 @@ class Tracker {
   TrackerOptions options_;
   vision::LikelihoodOptions likelihood_;
   std::vector<BankGait> bank_;
+  double gait_slope_rad_ = 0;
   GaitLattice lattice_;
   body::BodyShape shape_;  // the gaits' body shape, with the options' breadth
   vision::BackgroundModel background_;
