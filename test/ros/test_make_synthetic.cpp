@@ -160,8 +160,9 @@ TEST(SyntheticSequences, AreCompleteAndConsistent) {
   }
 }
 
-// The sequences are what their files say: two speeds on the level, an uphill slope, and an
-// occluder that hides the walker half-way through.
+// The sequences are what their files say: two speeds on the level, an uphill slope, a steep
+// descent seen 40 degrees out of the image plane, and an occluder that hides the walker
+// half-way through.
 TEST(SyntheticSequences, ShowWhatTheyAreMeantTo) {
   auto speed_kmh = [](const Sequence& s) {
     const Eigen::Vector3d d = s.joints.back().at("waist") - s.joints.front().at("waist");
@@ -174,6 +175,15 @@ TEST(SyntheticSequences, ShowWhatTheyAreMeantTo) {
   EXPECT_NEAR(static_cast<double>(uphill.calibration["ground_slope_rad"]), 0.075, 1e-9);
   const Eigen::Vector3d climb = uphill.joints.back().at("waist") - uphill.joints.front().at("waist");
   EXPECT_NEAR(std::atan2(climb.z(), climb.head<2>().norm()), 0.075, 0.03) << "the walker climbs";
+
+  const Sequence downhill = readSequence(kSequences + "/downhill_steep");
+  EXPECT_NEAR(static_cast<double>(downhill.calibration["ground_slope_rad"]), -0.125, 1e-9);
+  const Eigen::Vector3d descent = downhill.joints.back().at("waist") - downhill.joints.front().at("waist");
+  EXPECT_NEAR(std::atan2(descent.z(), descent.head<2>().norm()), -0.125, 0.03) << "the walker descends";
+  // 40 degrees out of the image plane: 50 to the horizontal line of sight.
+  const core::vision::Camera view = core::vision::Camera::load(kSequences + "/downhill_steep_camera.yml", 0.001);
+  const Eigen::Vector2d sight = (downhill.joints.front().at("waist") - view.centre()).head<2>();
+  EXPECT_NEAR(std::acos(std::abs(descent.head<2>().normalized().dot(sight.normalized()))) * 180 / M_PI, 50, 8);
 
   // Occluded: the waist's pixel shows the shirt at the start and the board in the middle.
   const Sequence occluded = readSequence(kSequences + "/occluded");
