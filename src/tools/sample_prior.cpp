@@ -4,15 +4,21 @@
 // `--chain 1` every stride starts from the gait; with `--chain N` a particle walks on for N
 // strides, so that errors can build up from stride to stride. With `--end-speed` and/or
 // `--end-step` the gait changes along each chain, stride by stride, linearly from the start's to
-// the end's (a person slowing down or speeding up: issue 13's 7 -> 3 km/h profile).
+// the end's (a person slowing down or speeding up: issue 13's 7 -> 3 km/h profile). With
+// `--every-gait` it samples every feasible gait of the table instead (`--strides` each) and
+// counts, per slope and on the paper's grid, the gaits whose strides walk at least
+// `--min-fraction` of the time: the grid points the prior can use.
 //
 //   rosrun kneed_walker sample_prior --table config/prior_gait_table.yaml --prior config/prior.yaml
 //          [--speed 4.5] [--step 0.7] [--slope 0] [--end-speed V] [--end-step L] [--strides 1000]
 //          [--chain 1] [--fps 30] [--seed 1] [--noise-scale 1]
+//   rosrun kneed_walker sample_prior --every-gait [--strides 300] [--chain 1] [--min-fraction 0.99] [--threads 0]
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <vector>
@@ -26,6 +32,50 @@ namespace kw = kneed_walker::core;
 
 // With a change of gait, one prior per stride of a chain is built and held (about 10 kB each).
 constexpr int kMaxChangingChain = 1000;
+
+// --every-gait: per slope, how many of the table's feasible gaits keep walking.
+int everyGait(const kw::gait::GaitTable& table, const kw::prior::PriorOptions& options, int strides, int chain,
+              double fps, unsigned seed, int threads, double min_fraction) {
+  const kw::gait::GaitGrid& grid = table.grid;
+  const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
+  const double dt = (1.0 / fps) / std::sqrt(grid.referenceLegLength() / grid.gravity);
+  const auto fractions = kw::prior::tableWalkingFractions(table, sim, options, strides, chain, dt, seed, threads);
+  const kw::gait::GaitGrid paper = kw::gait::GaitGrid::paper();
+  auto member = [](const std::vector<double>& axis, double value) {
+    return std::any_of(axis.begin(), axis.end(), [&](double a) { return std::abs(a - value) < 1e-9; });
+  };
+  struct Count { int points = 0, feasible = 0, walking = 0, paper_points = 0, paper_walking = 0; };
+  std::map<int, Count> per_slope;
+  for (int i = 0; i < grid.size(); ++i) {
+    const auto cell = grid.cell(i);
+    Count& c = per_slope[cell[2]];
+    const bool on_paper = member(paper.speeds_kmh, grid.speeds_kmh[cell[0]]) &&
+                          member(paper.step_lengths_m, grid.step_lengths_m[cell[1]]) &&
+                          member(paper.slopes_rad, grid.slopes_rad[cell[2]]);
+    const auto& f = fractions[i];
+    const bool walks = f && (chain > 1 ? f->chainFraction() : f->fraction()) >= min_fraction;
+    ++c.points;
+    c.feasible += table.entries[i].feasible;
+    c.walking += walks;
+    c.paper_points += on_paper;
+    c.paper_walking += on_paper && walks;
+  }
+  std::printf("every feasible gait: %d strides each in chains of %d at %.0f fps, seed %u; a gait walks when %s >= %g\n",
+              strides, chain, fps, seed, chain > 1 ? "the fraction of whole chains" : "the fraction of strides",
+              min_fraction);
+  Count total;
+  for (const auto& [slope, c] : per_slope) {
+    std::printf("slope %+6.2f deg: %d of %d feasible gaits walk (%d grid points)", grid.slopes_rad[slope] * 180 / M_PI,
+                c.walking, c.feasible, c.points);
+    if (c.paper_points > 0) std::printf("; on the paper's grid %d of %d points", c.paper_walking, c.paper_points);
+    std::printf("\n");
+    total.points += c.points, total.feasible += c.feasible, total.walking += c.walking;
+    total.paper_points += c.paper_points, total.paper_walking += c.paper_walking;
+  }
+  std::printf("walking_gaits=%d (of %d feasible, %d grid points)\n", total.walking, total.feasible, total.points);
+  std::printf("walking_paper_grid_points=%d (of %d)\n", total.paper_walking, total.paper_points);
+  return 0;
+}
 
 int main(int argc, char** argv) {
   CLI::App app{"Measures how often the walking prior's sampled strides keep walking."};
@@ -53,6 +103,17 @@ int main(int argc, char** argv) {
   app.add_option("--fps", fps, "frame rate of the transitions, for the reference person")->check(kneed_walker::tools::FiniteRange(1.0, 1000.0));
   app.add_option("--seed", seed, "random seed");
   app.add_option("--noise-scale", noise_scale, "factor on the torque noise scales s_j of eq. 11")->check(kneed_walker::tools::FiniteRange(0.0, 100.0));
+  bool every_gait = false;
+  double min_fraction = 0.99;
+  int threads = 0;
+  auto* every = app.add_flag("--every-gait", every_gait,
+                             "sample every feasible gait of the table (--strides each) and count those that walk");
+  app.add_option("--min-fraction", min_fraction, "with --every-gait: the walking fraction (of strides, or with --chain "
+                 "N >= 2 of whole chains) a gait must reach to count")->check(kneed_walker::tools::FiniteRange(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--threads", threads, "with --every-gait: worker threads; 0 = all cores")->check(CLI::Range(0, 256));
+  for (const char* excluded : {"--speed", "--step", "--slope", "--end-speed", "--end-step"})
+    every->excludes(app.get_option(excluded));
   CLI11_PARSE(app, argc, argv);
   const bool changing = end_speed_kmh > 0 || end_step_m > 0;
   if (changing && (chain < 2 || chain > kMaxChangingChain)) {
@@ -69,6 +130,7 @@ int main(int argc, char** argv) {
     kw::prior::PriorOptions options = kw::prior::loadPriorOptions(prior_path);
     kw::prior::requirePriorTable(table, options);
     for (double& s : options.noise_scale) s *= noise_scale;
+    if (every_gait) return everyGait(table, options, strides, chain, fps, seed, threads, min_fraction);
     // One prior per stride of a chain: the gait at its place along the speed and step change.
     std::vector<kw::prior::WalkerPrior> stride_priors;
     std::set<std::string> notes;

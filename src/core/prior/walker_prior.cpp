@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "kneed_walker/core/common/config_file.h"
+#include "kneed_walker/core/common/parallel.h"
 
 namespace kneed_walker::core::prior {
 
@@ -211,6 +212,27 @@ WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int
       ++count.chains_walked;
   }
   return count;
+}
+
+std::vector<std::optional<WalkingFraction>> tableWalkingFractions(const gait::GaitTable& table,
+                                                                 const dynamics::WalkerSimulator& simulator,
+                                                                 const PriorOptions& options, int strides,
+                                                                 int strides_per_chain, double dt,
+                                                                 std::uint64_t seed, int threads) {
+  std::vector<std::optional<WalkingFraction>> fractions(table.entries.size());
+  common::parallelFor(static_cast<int>(table.entries.size()), threads, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      if (!table.entries[i].feasible) continue;
+      gait::Gait gait = table.entries[i].gait;
+      const dynamics::StrideResult stride = simulator.stride(gait.controls, gait.start);
+      if (!stride.completed) continue;
+      gait.stride_duration = stride.duration;
+      const std::vector<WalkerPrior> prior{WalkerPrior(simulator, gait, options)};
+      common::Random random(seed * 1000003u + static_cast<std::uint64_t>(i));
+      fractions[i] = sampleStrides(prior, strides, strides_per_chain, dt, random);
+    }
+  }, 1);
+  return fractions;
 }
 
 void stepPlacement(PlacementState& p, const PlacementNoise& n, double dt, double pivot_along_m,

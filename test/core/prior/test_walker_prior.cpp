@@ -319,6 +319,47 @@ TEST(WalkerPrior, EachStrideOfAChainWalksItsOwnPrior) {
   EXPECT_LT(chained.fraction(), 0.7);
 }
 
+// Every feasible gait of a table sampled with a prior of its own: an entry per grid point, none
+// where there is no feasible gait, the same figures on one thread and two, and each gait's
+// figure its own sampleStrides with the seed and index (here the shipped table's level layer
+// at 4-5 km/h, to keep it short).
+TEST(WalkerPrior, EveryGaitOfATableIsSampledWithItsOwnSeed) {
+  gait::GaitTable table = gait::loadGaitTable(kTable, test::shippedWalkerModel());
+  int kept = 0, at = -1;
+  for (int i = 0; i < table.grid.size(); ++i) {
+    const auto c = table.grid.cell(i);
+    const double speed = table.grid.speeds_kmh[c[0]];
+    if (table.grid.slopes_rad[c[2]] != 0.0 || speed < 4 || speed > 5) table.entries[i].feasible = false;
+    kept += table.entries[i].feasible;
+    if (table.entries[i].feasible && speed == 4.5 && table.grid.step_lengths_m[c[1]] == 0.7) at = i;
+  }
+  ASSERT_GT(kept, 5);
+  ASSERT_GE(at, 0);
+  const dynamics::WalkerSimulator sim(dynamics::dimensionlessWalker(table.body));
+  const PriorOptions options = loadPriorOptions(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/prior.yaml");
+  const double dt = 0.1;
+  const auto one = tableWalkingFractions(table, sim, options, 100, 1, dt, 7, 1);
+  const auto two = tableWalkingFractions(table, sim, options, 100, 1, dt, 7, 2);
+  ASSERT_EQ(one.size(), table.entries.size());
+  int sampled = 0;
+  for (size_t i = 0; i < one.size(); ++i) {
+    EXPECT_EQ(one[i].has_value(), table.entries[i].feasible) << i;
+    ASSERT_EQ(one[i].has_value(), two[i].has_value()) << i;
+    if (!one[i]) continue;
+    ++sampled;
+    EXPECT_EQ(one[i]->walked, two[i]->walked) << i;
+    EXPECT_EQ(one[i]->fell, two[i]->fell) << i;
+    EXPECT_EQ(one[i]->walked + one[i]->fell, 100) << i;
+  }
+  EXPECT_EQ(sampled, kept);
+  gait::Gait gait = table.entries[at].gait;
+  gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
+  common::Random random(7 * 1000003u + static_cast<std::uint64_t>(at));
+  const WalkingFraction alone = sampleStrides({WalkerPrior(sim, gait, options)}, 100, 1, dt, random);
+  EXPECT_EQ(one[at]->walked, alone.walked);
+  EXPECT_GE(one[at]->fraction(), 0.99);
+}
+
 // The placement processes: turning keeps the pivot (the stance foot) in place, the sway stays
 // near zero, and with no noise nothing moves.
 TEST(WalkerPrior, PlacementProcessesTurnAboutTheStanceFoot) {

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -183,5 +184,15 @@ struct WalkingFraction {
 };
 WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int strides,
                               int strides_per_chain, double dt, common::Random& random);
+
+// sampleStrides on every feasible gait of a table, each with a prior of its own and a generator
+// seeded by `seed` and the gait's index (the same figures on any number of threads); an entry
+// per grid point, nullopt where there is no feasible gait or it completes no stride. Issue 13's
+// "usable by the prior" counts the grid points whose gait keeps walking.
+std::vector<std::optional<WalkingFraction>> tableWalkingFractions(const gait::GaitTable& table,
+                                                                 const dynamics::WalkerSimulator& simulator,
+                                                                 const PriorOptions& options, int strides,
+                                                                 int strides_per_chain, double dt,
+                                                                 std::uint64_t seed, int threads);
 
 }  // namespace kneed_walker::core::prior
