@@ -295,15 +295,21 @@ Gait interpolateGait(const GaitTable& table, double speed_kmh, double step_lengt
       found.missing.push_back(index[corner]);
   }
   if (feasible_weight == 0) {
-    // No feasible gait around the target: the nearest feasible grid point, in grid steps.
+    // No feasible gait around the target: the nearest feasible grid point, in grid steps, at
+    // the grid slope nearest the target's if it has one (see the header).
     const std::array<double, 3> at{iv + tv, il + tl, is + ts};
+    const int target_slope = static_cast<int>(std::lround(is + ts));
     double best = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < g.size(); ++i) {
-      if (!table.entries[i].feasible) continue;
-      const auto c = g.cell(i);
-      double d = 0;
-      for (int axis = 0; axis < 3; ++axis) d += (c[axis] - at[axis]) * (c[axis] - at[axis]);
-      if (d < best) best = d, found.nearest = i;
+    for (const bool same_slope : {true, false}) {
+      for (int i = 0; i < g.size(); ++i) {
+        if (!table.entries[i].feasible) continue;
+        const auto c = g.cell(i);
+        if (same_slope && c[2] != target_slope) continue;
+        double d = 0;
+        for (int axis = 0; axis < 3; ++axis) d += (c[axis] - at[axis]) * (c[axis] - at[axis]);
+        if (d < best) best = d, found.nearest = i;
+      }
+      if (found.nearest >= 0) break;
     }
     if (found.nearest < 0) throw std::out_of_range("the gait table has no feasible gait");
     weight.fill(0);

@@ -343,10 +343,23 @@ TEST(GaitTable, ATargetInAHoleTakesTheNearestFeasibleGait) {
     const auto c = g.cell(i);
     return (c[0] - h[0]) * (c[0] - h[0]) + (c[1] - h[1]) * (c[1] - h[1]) + (c[2] - h[2]) * (c[2] - h[2]);
   };
+  // The nearest on the hole's own slope (it has feasible gaits).
+  EXPECT_EQ(g.cell(note.nearest)[2], h[2]);
   for (int i = 0; i < g.size(); ++i)
-    if (table.entries[i].feasible) EXPECT_GE(steps2(i), steps2(note.nearest)) << "grid point " << i << " is nearer";
+    if (table.entries[i].feasible && g.cell(i)[2] == h[2])
+      EXPECT_GE(steps2(i), steps2(note.nearest)) << "grid point " << i << " is nearer";
   EXPECT_NE(note.describe(g).find("took the nearest feasible gait"), std::string::npos) << note.describe(g);
   std::cout << note.describe(g) << "\n";
+  // A slope with no feasible gait at all takes the nearest over all slopes.
+  GaitTable bare = table;
+  for (int i = 0; i < g.size(); ++i)
+    if (g.cell(i)[2] == h[2]) bare.entries[i].feasible = false;
+  InterpolationNote elsewhere;
+  interpolateGait(bare, g.speeds_kmh[h[0]], g.step_lengths_m[h[1]], g.slopes_rad[h[2]], &elsewhere);
+  ASSERT_GE(elsewhere.nearest, 0);
+  EXPECT_NE(g.cell(elsewhere.nearest)[2], h[2]);
+  for (int i = 0; i < g.size(); ++i)
+    if (bare.entries[i].feasible) EXPECT_GE(steps2(i), steps2(elsewhere.nearest)) << "grid point " << i << " is nearer";
 }
 
 // Of two runs, the lower effort wins per grid point; a feasible gait beats none; tables of

@@ -97,7 +97,11 @@ struct InterpolationNote {
 // interpolated trilinearly between the eight surrounding gaits (dimensionless). At a hole it
 // degrades gracefully: the feasible corners' weights are scaled up to sum to 1, and if the cell
 // has no feasible corner that weighs, the nearest feasible grid point's gait (in grid steps) is
-// taken; `note` (if given) says which points were missing. Throws std::out_of_range naming the
+// taken, on the grid slope nearest the target's if that slope has any (a gait of another slope
+// carries that slope's torso rest and impulse: with the tables at ±10°, a hole at −4.3° took the
+// −7.16° gait, and sample_prior at 3.5 km/h, 0.6 m walked 0.972 of strides and 27 % of chains
+// of 10 there, against 1.000 and 86 % with the −4.3° layer's own nearest, 3.5 km/h, 0.7 m);
+// `note` (if given) says which points were missing. Throws std::out_of_range naming the
 // axis for a target outside the grid, or when the table has no feasible gait at all.
 // The result's stride_duration is 0: interpolated controls and start are close to, but not
 // exactly on, a periodic stride; simulate one to know its duration.
