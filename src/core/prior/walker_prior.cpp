@@ -223,11 +223,7 @@ std::vector<std::optional<WalkingFraction>> tableWalkingFractions(const gait::Ga
   common::parallelFor(static_cast<int>(table.entries.size()), threads, [&](int begin, int end) {
     for (int i = begin; i < end; ++i) {
       if (!table.entries[i].feasible) continue;
-      gait::Gait gait = table.entries[i].gait;
-      const dynamics::StrideResult stride = simulator.stride(gait.controls, gait.start);
-      if (!stride.completed) continue;
-      gait.stride_duration = stride.duration;
-      const std::vector<WalkerPrior> prior{WalkerPrior(simulator, gait, options)};
+      const std::vector<WalkerPrior> prior{WalkerPrior(simulator, table.entries[i].gait, options)};
       common::Random random(seed * 1000003u + static_cast<std::uint64_t>(i));
       fractions[i] = sampleStrides(prior, strides, strides_per_chain, dt, random);
     }

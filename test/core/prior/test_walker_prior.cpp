@@ -352,10 +352,8 @@ TEST(WalkerPrior, EveryGaitOfATableIsSampledWithItsOwnSeed) {
     EXPECT_EQ(one[i]->walked + one[i]->fell, 100) << i;
   }
   EXPECT_EQ(sampled, kept);
-  gait::Gait gait = table.entries[at].gait;
-  gait.stride_duration = sim.stride(gait.controls, gait.start).duration;
   common::Random random(7 * 1000003u + static_cast<std::uint64_t>(at));
-  const WalkingFraction alone = sampleStrides({WalkerPrior(sim, gait, options)}, 100, 1, dt, random);
+  const WalkingFraction alone = sampleStrides({WalkerPrior(sim, table.entries[at].gait, options)}, 100, 1, dt, random);
   EXPECT_EQ(one[at]->walked, alone.walked);
   EXPECT_GE(one[at]->fraction(), 0.99);
 }

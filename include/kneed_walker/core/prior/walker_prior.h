@@ -187,7 +187,7 @@ WalkingFraction sampleStrides(const std::vector<WalkerPrior>& stride_priors, int
 
 // sampleStrides on every feasible gait of a table, each with a prior of its own and a generator
 // seeded by `seed` and the gait's index (the same figures on any number of threads); an entry
-// per grid point, nullopt where there is no feasible gait or it completes no stride. Issue 13's
+// per grid point, nullopt where there is no feasible gait. Issue 13's
 // "usable by the prior" counts the grid points whose gait keeps walking.
 std::vector<std::optional<WalkingFraction>> tableWalkingFractions(const gait::GaitTable& table,
                                                                  const dynamics::WalkerSimulator& simulator,
