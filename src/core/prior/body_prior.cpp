@@ -1,20 +1,33 @@
 #include "kneed_walker/core/prior/body_prior.h"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace kneed_walker::core::prior {
 
 BodyPrior::BodyPrior(const WalkerPrior& walker_prior, double person_height_m, double leg_length_per_height,
-                     double gravity)
+                     double gravity, std::optional<double> ground_slope_rad)
     : walker_prior_(walker_prior),
       shape_(body::BodyShape::forHeight(person_height_m)),
+      ground_slope_rad_(ground_slope_rad.value_or(walker_prior.gait().target.slope)),
+      // The torso's rest is torso_rest_per_slope × slope from the ground's normal: the rest at
+      // the ground's slope less the rest at the gait's.
+      torso_turn_rad_(walker_prior.options().fixed.torso_rest_per_slope *
+                      (ground_slope_rad_ - walker_prior.gait().target.slope)),
       leg_length_m_(leg_length_per_height * person_height_m),
       natural_time_s_(std::sqrt(leg_length_m_ / gravity)),
-      along_xy_m_(leg_length_m_ * std::cos(walker_prior.gait().target.slope)),
-      foot_radius_m_(walker_prior.simulator().model().foot_radius * leg_length_m_) {}
+      along_xy_m_(leg_length_m_ * std::cos(ground_slope_rad_)),
+      foot_radius_m_(walker_prior.simulator().model().foot_radius * leg_length_m_) {
+  if (!std::isfinite(ground_slope_rad_)) throw std::invalid_argument("the body prior's ground slope must be finite");
+}
 
 body::BodyPose BodyPrior::pose(const BodyParticle& p) const {
-  return body::bodyPose(walker_prior_.simulator().map(), p.walker.walker, slopeRad(), p.placement.value, shape_,
+  if (torso_turn_rad_ == 0)
+    return body::bodyPose(walker_prior_.simulator().map(), p.walker.walker, ground_slope_rad_, p.placement.value,
+                          shape_, leg_length_m_);
+  dynamics::WalkerState turned = p.walker.walker;
+  turned.q[dynamics::kTorso] += torso_turn_rad_;
+  return body::bodyPose(walker_prior_.simulator().map(), turned, ground_slope_rad_, p.placement.value, shape_,
                         leg_length_m_);
 }
 

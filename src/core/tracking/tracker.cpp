@@ -44,7 +44,8 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   // The gaits the particles start on: the table's feasible gaits at the slope nearest the
   // ground's that has any, as fast and long-stepped as the options ask at least, scaled to the
   // person by Froude similarity. (The prior's table has no gait uphill beyond 4.3°: on a steeper
-  // climb the particles walk the 4.3° gaits, as on the tables that stopped there.)
+  // climb the particles walk the 4.3° gaits, their bodies turned onto the ground's slope:
+  // BodyPrior.)
   const gait::GaitGrid& grid = table.grid;
   auto startsOn = [&](int i) {
     const auto cell = grid.cell(i);
@@ -74,7 +75,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     BankGait gait;
     gait.prior = std::make_unique<prior::BodyPrior>(
         prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
-        table.body.leg_length_per_height, grid.gravity);
+        table.body.leg_length_per_height, grid.gravity, options.ground_slope_rad);
     gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
     gait.step_length_m = grid.step_lengths_m[cell[1]] * step_scale;
     bank_.push_back(std::move(gait));

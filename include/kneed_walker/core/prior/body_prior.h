@@ -25,9 +25,14 @@ struct BodyParticle {
 
 class BodyPrior {
  public:
-  // `gravity` (m/s²) sets the walker's natural time √(L/g); `ground_slope_rad` is the gait's.
+  // `gravity` (m/s²) sets the walker's natural time √(L/g). The body walks on ground of the
+  // gait's slope, or of `ground_slope_rad` if given: a ground steeper or flatter than any gait of
+  // the table (the prior's has none uphill beyond 4.3°). Then the walker's motion is turned into
+  // that ground's frame, a kinematic stand-in for the gait there: the legs keep their angles to
+  // the ground's normal (the feet stay on it) and the torso its angle to its rest, which the
+  // prior's torso_rest_per_slope sets at the ground's slope (so a steeper climb leans it more).
   BodyPrior(const WalkerPrior& walker_prior, double person_height_m, double leg_length_per_height,
-            double gravity);
+            double gravity, std::optional<double> ground_slope_rad = std::nullopt);
 
   // A particle at `phase` ∈ [0, 1) of the gait's stride with fresh samples, walking along
   // `heading_rad` with its stance foot's centre above `stance_foot_xy_m`; `pose` receives its
@@ -50,11 +55,14 @@ class BodyPrior {
   const body::BodyShape& shape() const { return shape_; }
   double legLengthM() const { return leg_length_m_; }
   double naturalTimeS() const { return natural_time_s_; }  // √(L/g): one unit of the walker's time, s
-  double slopeRad() const { return walker_prior_.gait().target.slope; }
+  double slopeRad() const { return walker_prior_.gait().target.slope; }  // the gait's
+  double groundSlopeRad() const { return ground_slope_rad_; }            // the body's ground's
 
  private:
   WalkerPrior walker_prior_;
   body::BodyShape shape_;
+  double ground_slope_rad_;
+  double torso_turn_rad_;  // added to the walker's torso angle in the ground's frame
   double leg_length_m_, natural_time_s_, along_xy_m_, foot_radius_m_;
 };
 
