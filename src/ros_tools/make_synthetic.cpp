@@ -114,6 +114,7 @@ kw::synthetic::SyntheticWalk synthesize(const Settings& s, const kw::synthetic::
   norm.start_speed_kmh = options.speed_kmh;
   norm.end_speed_kmh = s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh;
   norm.heading_rad = options.heading_rad;
+  norm.slope_rad = options.slope_rad;
   norm.start_m = options.start_m;
   norm.duration_s = options.duration_s;
   norm.fps = options.fps;
@@ -236,10 +237,10 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
                 static_cast<unsigned long long>(options.seed), walk.attempts, walk.attempts == 1 ? "" : "s");
   } else {
     std::printf("make_synthetic: %zu frames at %.1f fps, walked by the gait norms %s at %.2f to %.2f km/h, "
-                "%.2f m mean steps, level, heading %.3f rad, seed %llu\n",
+                "%.2f m mean steps, slope %.3f rad, heading %.3f rad, seed %llu\n",
                 walk.frames.size(), options.fps, s.norms.c_str(), options.speed_kmh,
                 s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh, meanStepLength(walk),
-                options.heading_rad, static_cast<unsigned long long>(options.seed));
+                options.slope_rad, options.heading_rad, static_cast<unsigned long long>(options.seed));
   }
   std::printf("person %.0f-%.0f px tall; wrote %s.bag, %s_ground_truth.csv, %s_camera.yml, %s.avi\n",
               smallest_px, largest_px, stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
@@ -307,11 +308,11 @@ int main(int argc, char** argv) {
   app.add_option("--speed", w.speed_kmh, "walking speed, km/h")->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.5, 10));
   auto* step = app.add_option("--step", w.step_length_m, "step length, m (not with --norms: the norms set it)")
                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 3));
-  auto* slope = app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill (not with --norms)")
-                    ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.2, 0.2));
+  app.add_option("--slope", w.slope_rad, "ground slope along the walk, rad, positive uphill")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(-0.2, 0.2));
   auto* norms = app.add_option("--norms", s.norms,
                  "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
-                 "prior did not make")->excludes(step)->excludes(slope);
+                 "prior did not make")->excludes(step);
   app.add_option("--end-speed", s.end_speed_kmh,
                  "the speed at the end, km/h; the speed changes linearly from --speed (default: --speed); by the "
                  "prior, each stride walks the gait of its heel strike's moment")

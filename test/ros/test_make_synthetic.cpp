@@ -185,6 +185,16 @@ TEST(SyntheticSequences, ShowWhatTheyAreMeantTo) {
   const Eigen::Vector2d sight = (downhill.joints.front().at("waist") - view.centre()).head<2>();
   EXPECT_NEAR(std::acos(std::abs(descent.head<2>().normalized().dot(sight.normalized()))) * 180 / M_PI, 50, 8);
 
+  // The paper's Fig. 5 setting, walked by the norms: a 10-degree climb 40 degrees out of the
+  // image plane, its ground in the calibration file.
+  const Sequence hill = readSequence(kSequences + "/norms_uphill_steep");
+  EXPECT_NEAR(static_cast<double>(hill.calibration["ground_slope_rad"]), 10 * M_PI / 180, 1e-9);
+  const Eigen::Vector3d ascent = hill.joints.back().at("waist") - hill.joints.front().at("waist");
+  EXPECT_NEAR(std::atan2(ascent.z(), ascent.head<2>().norm()), 10 * M_PI / 180, 0.03) << "the person climbs";
+  const core::vision::Camera hill_view = core::vision::Camera::load(kSequences + "/norms_uphill_steep_camera.yml", 0.001);
+  const Eigen::Vector2d hill_sight = (hill.joints.front().at("waist") - hill_view.centre()).head<2>();
+  EXPECT_NEAR(std::acos(std::abs(ascent.head<2>().normalized().dot(hill_sight.normalized()))) * 180 / M_PI, 50, 8);
+
   // Occluded: the waist's pixel shows the shirt at the start and the board in the middle.
   const Sequence occluded = readSequence(kSequences + "/occluded");
   const core::vision::Camera camera = core::vision::Camera::load(kSequences + "/occluded_camera.yml", 0.001);

@@ -43,6 +43,7 @@ int sideOf(dynamics::Leg leg) { return leg == dynamics::Leg::kLeft ? 0 : 1; }
 // The norms' angles in the walker's terms, blended between the two speed classes around v*.
 class BlendedNorms {
  public:
+  // torso_lean_rad: the torso's mean forward lean in the walker's frame (from the ground's normal).
   BlendedNorms(const gait::GaitNorms& norms, double torso_lean_rad) : torso_lean_rad_(torso_lean_rad) {
     for (const ClassSpeed& c : kClassSpeeds) {
       const gait::NormSpeedClass& speed_class = norms.speedClass(c.name);
@@ -180,6 +181,7 @@ std::vector<std::string> validate(const NormWalkOptions& o) {
   within("fps", o.fps, 1.0, 1000.0);
   within("person_height_m", o.person_height_m, 1.0, 2.3);
   within("torso_lean_rad", o.torso_lean_rad, -0.5, 0.5);
+  within("slope_rad", o.slope_rad, -0.2, 0.2);
   if (!std::isfinite(o.heading_rad)) problems.push_back("heading_rad must be finite");
   if (!o.start_m.allFinite()) problems.push_back("start_m must be finite");
   if (std::isfinite(o.duration_s * o.fps) && o.duration_s * o.fps > 100000)
@@ -202,13 +204,15 @@ SyntheticWalk synthesizeNormWalk(const gait::GaitNorms& norms, const dynamics::B
                                  const NormWalkOptions& o, double gravity_mps2) {
   common::throwIfInvalid("norm walk", validate(o));
   const dynamics::KinematicMap map = normWalkerMap(proportions);
-  const BlendedNorms blended(norms, o.torso_lean_rad);
+  // The torso's lean from the vertical, plus a third of the slope into it: from the ground's
+  // normal, the slope and a third (the vertical is at -slope in the walker's frame).
+  constexpr double kTorsoLeanPerSlope = 4.0 / 3.0;
+  const BlendedNorms blended(norms, o.torso_lean_rad + kTorsoLeanPerSlope * o.slope_rad);
   const body::BodyShape shape = body::BodyShape::forHeight(o.person_height_m);
 
   SyntheticWalk walk;
   const double leg_m = proportions.leg_length_per_height * o.person_height_m;
   walk.leg_length_m = leg_m;
-  walk.ground = vision::GroundPlane{o.start_m, 0.0, o.heading_rad};
   const double natural_time_s = std::sqrt(leg_m / gravity_mps2);
   const double froude_speed_mps = std::sqrt(gravity_mps2 * leg_m);  // v* = v / √(g L)
   auto speed_mps = [&](double t_s) {
@@ -245,13 +249,16 @@ SyntheticWalk synthesizeNormWalk(const gait::GaitNorms& norms, const dynamics::B
     walker.stance_foot_x = contact.stance_foot_x;
     walker.heel_strikes = contact.heel_strikes;
     for (int side : {0, 1}) placement.hip_abduction_rad[side] = angles.legs[side].abduction;
-    return body::bodyPose(map, walker, 0.0, placement, shape, leg_m);
+    return body::bodyPose(map, walker, o.slope_rad, placement, shape, leg_m);
   };
   const dynamics::Point first_foot = dynamics::stanceFootCentre(map, coordinates(angles, contact.stance), 0.0);
-  placement.ground_origin_m = o.start_m - leg_m * first_foot.real() * heading;
+  placement.ground_origin_m = o.start_m - leg_m * first_foot.real() * std::cos(o.slope_rad) * heading;
   body::BodyPose pose = pose_now();
   placement.ground_origin_m += o.start_m - pose.foot_centres[sideOf(contact.stance)].head<2>();  // abduction moved it
   pose = pose_now();
+  // The walker's frame stands on the ground through its origin; later the origin moves only
+  // across the walk (abduction), where the ground is level, so it stays on it.
+  walk.ground = vision::GroundPlane{placement.ground_origin_m, o.slope_rad, o.heading_rad};
   Eigen::Vector3d stance_foot_m = pose.foot_centres[sideOf(contact.stance)];
 
   const int frame_count = static_cast<int>(std::floor(o.duration_s * o.fps)) + 1;

@@ -84,6 +84,61 @@ TEST(NormWalk, FeetStayOnTheGroundAndTheSwingKneeBends) {
   EXPECT_NEAR(stance_knee_peak, 23, 3);     // loading response (the norm: about 20 degrees)
 }
 
+// Up and down a 10 degree hill (the paper's Fig. 5 grade): the walk rises along its heading as
+// the ground does, both feet stay on the sloped ground (the stance foot rolling without
+// slipping), and the torso leans into the hill by a third of the slope more than on the level.
+TEST(NormWalk, WalksUpAndDownAHillOnItsGround) {
+  const double gamma = 10 * M_PI / 180;
+  const SyntheticWalk level = synthesizeNormWalk(norms(), test::shippedWalkerModel(), options(4.5, 4.5));
+  const auto mean_torso_lean = [](const SyntheticWalk& walk) {  // from the vertical, forward positive
+    double sum = 0;
+    for (const SyntheticFrame& f : walk.frames) {
+      const Eigen::Vector3d up = f.pose.joints[body::kNeck] - f.pose.joints[body::kWaist];
+      sum += std::atan2(up.head<2>().dot(Eigen::Vector2d(std::cos(f.placement.heading_rad), std::sin(f.placement.heading_rad))), up.z());
+    }
+    return sum / static_cast<double>(walk.frames.size());
+  };
+  for (const double slope : {gamma, -gamma}) {
+    NormWalkOptions o = options(4.5, 4.5);
+    o.slope_rad = slope;
+    const SyntheticWalk walk = synthesizeNormWalk(norms(), test::shippedWalkerModel(), o);
+    EXPECT_DOUBLE_EQ(walk.ground.slope_rad, slope);
+    EXPECT_DOUBLE_EQ(walk.ground.uphill_heading_rad, o.heading_rad);
+    const double foot_radius_m = test::shippedWalkerModel().foot_radius * walk.leg_length_m;
+    double lowest_m = 1, highest_lower_m = -1, largest_slide_m = 0;  // soles above the ground
+    for (std::size_t i = 0; i < walk.frames.size(); ++i) {
+      const SyntheticFrame& f = walk.frames[i];
+      double lower_m = 1;
+      for (int side : {0, 1}) {
+        const Eigen::Vector3d& centre = f.pose.foot_centres[side];
+        const double above_m = (centre - Eigen::Vector3d(centre.x(), centre.y(), walk.ground.height(centre.head<2>())))
+                                   .dot(walk.ground.normal());
+        lower_m = std::min(lower_m, above_m - foot_radius_m * std::cos(f.placement.hip_abduction_rad[side]));
+      }
+      lowest_m = std::min(lowest_m, lower_m);
+      highest_lower_m = std::max(highest_lower_m, lower_m);
+      if (i == 0 || f.walker.heel_strikes != walk.frames[i - 1].walker.heel_strikes) continue;
+      const int side = f.walker.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
+      const double turn = f.walker.q[dynamics::kStanceShank] - walk.frames[i - 1].walker.q[dynamics::kStanceShank];
+      const Eigen::Vector3d rolled = walk.frames[i - 1].pose.foot_centres[side] - foot_radius_m * turn * f.pose.forward;
+      largest_slide_m = std::max(largest_slide_m, (f.pose.foot_centres[side] - rolled).norm());
+    }
+    const Eigen::Vector3d travelled = walk.frames.back().pose.joints[body::kWaist] - walk.frames.front().pose.joints[body::kWaist];
+    const double rise = std::atan2(travelled.z(), travelled.head<2>().norm());
+    const double lean_gain = mean_torso_lean(walk) - mean_torso_lean(level);
+    std::cout << degrees(slope) << " deg: lowest sole " << lowest_m * 1e3 << " mm, the lower sole at most "
+              << highest_lower_m * 1e3 << " mm above the ground, largest slide " << largest_slide_m * 1e3
+              << " mm, waist rises at " << degrees(rise) << " deg, torso leans " << degrees(lean_gain) << " deg more\n";
+    EXPECT_GT(lowest_m, -1e-3);  // contact changes are found to 1 ms, as on the level
+    EXPECT_LT(highest_lower_m, 1e-3);  // and in every frame a foot stands on it
+    EXPECT_LT(largest_slide_m, 1e-9);
+    EXPECT_NEAR(rise, slope, 0.02);  // whole frames, not whole strides: the hip's bob
+    EXPECT_NEAR(lean_gain, slope / 3, 0.01);
+    EXPECT_LT((walk.frames.front().pose.foot_centres[walk.frames.front().walker.stance_leg == dynamics::Leg::kLeft ? 0 : 1]
+                   .head<2>() - o.start_m).norm(), 1e-9);
+  }
+}
+
 // A walk that slows from 6.5 to 3.5 km/h: the first second is faster than the last, by about
 // the ratio asked, and the steps get shorter.
 TEST(NormWalk, SlowsDownAsAsked) {

@@ -20,6 +20,12 @@
 //   or above the ground. The stance foot rolls without slipping (the walker's rolling foot)
 //   and stays where it is put: contact passes to the leading foot when its leg would hold the
 //   hip higher (a heel strike), where that foot is.
+// - Slope. On a hill (`slope_rad`, positive uphill along the heading) the legs keep their level
+//   angles to the ground's normal, so the whole leg motion turns with the ground (a hip that
+//   flexes about as much more at contact as the grade, as people do uphill); the torso keeps its
+//   lean from the vertical and leans a third of the slope more into it, as the prior's rest
+//   angle does (prior.yaml's torso_rest_per_slope, the paper's pictures). Contact and rolling
+//   are the walker's, in the slope's frame, so the feet stay on the sloped ground.
 // The frames are the body model's poses (body_model.h) of these walker states, for a person of
 // the given height with the walker's proportions: the same joints the tracker estimates.
 #pragma once
@@ -39,7 +45,8 @@ namespace kneed_walker::core::synthetic {
 struct NormWalkOptions {
   double start_speed_kmh = 4.5;  // speed at the first frame
   double end_speed_kmh = 4.5;    // speed at the last frame; between them it changes linearly in time
-  double heading_rad = 0.0;      // walking direction in the world XY plane (level ground)
+  double heading_rad = 0.0;      // walking direction in the world XY plane
+  double slope_rad = 0.0;        // ground slope along the walk, positive uphill
   Eigen::Vector2d start_m = Eigen::Vector2d::Zero();  // world XY of the first stance foot
   double duration_s = 3.0;
   double fps = 10.0;
@@ -55,7 +62,7 @@ std::vector<std::string> validate(const NormWalkOptions& options);
 // std::out_of_range for another name.
 double nominalDimensionlessSpeed(const std::string& speed_class);
 
-// Walks the person by the norms for options.duration_s on level ground. The result's `gait`
+// Walks the person by the norms for options.duration_s on the ground of options.slope_rad. The result's `gait`
 // and `attempts` are those of prior walks and stay empty. Throws std::invalid_argument for bad
 // options, std::out_of_range when the norms lack a class or an angle it needs.
 SyntheticWalk synthesizeNormWalk(const gait::GaitNorms& norms, const dynamics::BodyProportions& proportions,
