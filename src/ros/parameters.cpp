@@ -137,6 +137,15 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("gait_speed_sd_kmh", t.gait_speed_sd_kmh);
   reader.read("gait_step_sd_m", t.gait_step_sd_m);
   reader.read("lost_likelihood_fraction", t.lost_likelihood_fraction);
+  reader.read("gait_slope_change_probability", t.gait_slope_change_probability);
+  std::string hill_gaits = t.hill_gaits == core::tracking::HillGaits::kNearest ? "nearest" : "level_to_nearest";
+  reader.read("hill_gaits", hill_gaits);
+  if (hill_gaits == "nearest")
+    t.hill_gaits = core::tracking::HillGaits::kNearest;
+  else if (hill_gaits == "level_to_nearest")
+    t.hill_gaits = core::tracking::HillGaits::kLevelToNearest;
+  else
+    reader.addProblem(reader.qualified("hill_gaits") + " = '" + hill_gaits + "' must be nearest or level_to_nearest");
   reader.read("default_frame_interval_s", t.default_frame_interval_s);
   reader.read("max_frame_gap_s", t.max_frame_gap_s);
   reader.read("use_optical_flow", config.likelihood.use_flow);

@@ -493,10 +493,12 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     const kw::tracking::Tracker& tracker = session_->tracker(person.body);
     // The particles walk the prior table's gaits at the slope nearest the ground's that has any
     // (none uphill beyond 4.3°): say so once when that is more than a degree away.
-    if (std::abs(tracker.gaitSlopeRad() - config_.tracker.ground_slope_rad) > M_PI / 180)
+    const double nearest_gait_slope_rad = config_.tracker.ground_slope_rad >= 0 ? tracker.gaitSlopesRad().back()
+                                                                                : tracker.gaitSlopesRad().front();
+    if (std::abs(nearest_gait_slope_rad - config_.tracker.ground_slope_rad) > M_PI / 180)
       NODELET_WARN_ONCE("the ground slopes %.1f degrees, but the prior's gait table has no gaits there: the walkers "
                         "walk its %.1f-degree gaits", config_.tracker.ground_slope_rad * 180 / M_PI,
-                        tracker.gaitSlopeRad() * 180 / M_PI);
+                        nearest_gait_slope_rad * 180 / M_PI);
     const std::string id = std::to_string(person.body);
     poses->bodies.push_back(toBodyPose(estimate, header, id, tracker.imageBox(estimate.pose),
                                        cv::Size(tracker.camera().width(), tracker.camera().height())));

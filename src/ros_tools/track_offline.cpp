@@ -257,6 +257,15 @@ int main(int argc, char** argv) {
   app.add_option("--breadth", options.person_breadth_scale,
                  "the person's torso and thighs this many times as broad as the body model's (a coat, arms)")
       ->capture_default_str()->check(FiniteRange(0.5, 3.0));
+  app.add_option("--hill-gaits", options.hill_gaits,
+                 "on a hill, the particles walk the gaits of the table's slope nearest the ground's (nearest) or "
+                 "those and every slope's between it and the level (level-to-nearest)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, kw::tracking::HillGaits>{
+          {"nearest", kw::tracking::HillGaits::kNearest}, {"level-to-nearest", kw::tracking::HillGaits::kLevelToNearest}}))
+      ->capture_default_str();
+  app.add_option("--gait-slope-change", options.gait_slope_change_probability,
+                 "on a hill: the chance per heel strike that a particle's gait moves to a neighbouring slope's")
+      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
   app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
       ->capture_default_str()->check(FiniteRange(0.0, 3.0));
   app.add_option("--particles", options.num_particles, "particles (per person)")->capture_default_str()->check(CLI::Range(1, 1000000));

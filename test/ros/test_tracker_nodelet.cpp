@@ -248,6 +248,7 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
   bad.setParam("num_particles", -5);
   bad.setParam("person_mass_kg", "heavy");
   bad.setParam("num_partcles", 100);
+  bad.setParam("hill_gaits", "steepest");
   try {
     loadTrackerNodeConfig(bad);
     FAIL() << "bad parameters were accepted";
@@ -256,6 +257,8 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
     EXPECT_NE(what.find("/bad_parameters/num_particles = -5 is outside"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/person_mass_kg must be a number"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/num_partcles is not a parameter"), std::string::npos) << what;
+    EXPECT_NE(what.find("/bad_parameters/hill_gaits = 'steepest' must be nearest or level_to_nearest"), std::string::npos)
+        << what;
     EXPECT_EQ(what.find("resample_ess_threshold ="), std::string::npos) << "a bad count is reported once: " << what;
   }
 }

@@ -10,10 +10,7 @@ BodyPrior::BodyPrior(const WalkerPrior& walker_prior, double person_height_m, do
     : walker_prior_(walker_prior),
       shape_(body::BodyShape::forHeight(person_height_m)),
       ground_slope_rad_(ground_slope_rad.value_or(walker_prior.gait().target.slope)),
-      // The torso's rest is torso_rest_per_slope × slope from the ground's normal: the rest at
-      // the ground's slope less the rest at the gait's.
-      torso_turn_rad_(walker_prior.options().fixed.torso_rest_per_slope *
-                      (ground_slope_rad_ - walker_prior.gait().target.slope)),
+      torso_rest_per_slope_(walker_prior.options().fixed.torso_rest_per_slope),
       leg_length_m_(leg_length_per_height * person_height_m),
       natural_time_s_(std::sqrt(leg_length_m_ / gravity)),
       along_xy_m_(leg_length_m_ * std::cos(ground_slope_rad_)),
@@ -22,11 +19,14 @@ BodyPrior::BodyPrior(const WalkerPrior& walker_prior, double person_height_m, do
 }
 
 body::BodyPose BodyPrior::pose(const BodyParticle& p) const {
-  if (torso_turn_rad_ == 0)
+  // The torso's rest is torso_rest_per_slope × slope from the ground's normal: the rest at the
+  // ground's slope less the rest at the slope of the gait the particle walks.
+  const double torso_turn_rad = torso_rest_per_slope_ * (ground_slope_rad_ - p.walker.gait.ground_slope);
+  if (torso_turn_rad == 0)
     return body::bodyPose(walker_prior_.simulator().map(), p.walker.walker, ground_slope_rad_, p.placement.value,
                           shape_, leg_length_m_);
   dynamics::WalkerState turned = p.walker.walker;
-  turned.q[dynamics::kTorso] += torso_turn_rad_;
+  turned.q[dynamics::kTorso] += torso_turn_rad;
   return body::bodyPose(walker_prior_.simulator().map(), turned, ground_slope_rad_, p.placement.value, shape_,
                         leg_length_m_);
 }

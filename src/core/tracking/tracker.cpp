@@ -41,44 +41,58 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     : camera_(camera), ground_(ground), options_(options), likelihood_(likelihood) {
   common::throwIfInvalid("tracker options", validate(options));
   prior::requirePriorTable(table, prior_options);
-  // The gaits the particles start on: the table's feasible gaits at the slope nearest the
-  // ground's that has any, as fast and long-stepped as the options ask at least, scaled to the
-  // person by Froude similarity. (The prior's table has no gait uphill beyond 4.3°: on a steeper
-  // climb the particles walk the 4.3° gaits, their bodies turned onto the ground's slope:
-  // BodyPrior.)
+  // The gaits the particles start on: the table's feasible gaits, as fast and long-stepped as
+  // the options ask at least, scaled to the person by Froude similarity, at the slope nearest
+  // the ground's that has any and at every slope between it and the level (TrackerOptions::
+  // hill_gaits). The prior's table has no gait uphill beyond 4.3°: on a steeper climb the
+  // particles walk the 4.3° gaits and those between; their bodies are turned onto the ground's
+  // slope (BodyPrior).
   const gait::GaitGrid& grid = table.grid;
   auto startsOn = [&](int i) {
     const auto cell = grid.cell(i);
     return table.entries[i].feasible && grid.speeds_kmh[cell[0]] >= options.min_gait_speed_kmh &&
            grid.step_lengths_m[cell[1]] >= options.min_gait_step_m;
   };
-  int slope = -1;
+  std::vector<int> with_gaits;  // the grid's slopes that have a gait to start on
   for (int s = 0; s < static_cast<int>(grid.slopes_rad.size()); ++s) {
     bool any = false;
     for (int i = 0; i < grid.size() && !any; ++i) any = grid.cell(i)[2] == s && startsOn(i);
-    if (any && (slope < 0 || std::abs(grid.slopes_rad[s] - options.ground_slope_rad) <
-                                 std::abs(grid.slopes_rad[slope] - options.ground_slope_rad)))
-      slope = s;
+    if (any) with_gaits.push_back(s);
   }
-  if (slope < 0)
+  if (with_gaits.empty())
     throw std::invalid_argument("the prior's gait table has no feasible gait at any slope from " +
                                 std::to_string(options.min_gait_speed_kmh) + " km/h and " +
                                 std::to_string(options.min_gait_step_m) + " m steps");
-  gait_slope_rad_ = grid.slopes_rad[slope];
+  const int nearest = *std::min_element(with_gaits.begin(), with_gaits.end(), [&](int a, int b) {
+    return std::abs(grid.slopes_rad[a] - options.ground_slope_rad) < std::abs(grid.slopes_rad[b] - options.ground_slope_rad);
+  });
+  std::vector<int> bank_slopes;  // grid slope indices, ascending
+  for (const int s : with_gaits) {
+    const double slope = grid.slopes_rad[s];
+    const bool between = std::min(0.0, grid.slopes_rad[nearest]) <= slope && slope <= std::max(0.0, grid.slopes_rad[nearest]);
+    if (s == nearest || (options.hill_gaits == HillGaits::kLevelToNearest && between)) bank_slopes.push_back(s);
+  }
   const dynamics::WalkerSimulator simulator(dynamics::dimensionlessWalker(table.body));
   const double leg_m = table.body.leg_length_per_height * options.person_height_m;
   const double froude_speed = std::sqrt(leg_m / grid.referenceLegLength());
   const double step_scale = leg_m / grid.referenceLegLength();
-  for (int i = 0; i < grid.size(); ++i) {
-    const auto cell = grid.cell(i);
-    if (cell[2] != slope || !startsOn(i)) continue;
-    BankGait gait;
-    gait.prior = std::make_unique<prior::BodyPrior>(
-        prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
-        table.body.leg_length_per_height, grid.gravity, options.ground_slope_rad);
-    gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
-    gait.step_length_m = grid.step_lengths_m[cell[1]] * step_scale;
-    bank_.push_back(std::move(gait));
+  for (size_t b = 0; b < bank_slopes.size(); ++b) {
+    const int slope = bank_slopes[b];
+    gait_slopes_rad_.push_back(grid.slopes_rad[slope]);
+    const size_t first = bank_.size();
+    for (int i = 0; i < grid.size(); ++i) {
+      const auto cell = grid.cell(i);
+      if (cell[2] != slope || !startsOn(i)) continue;
+      BankGait gait;
+      gait.prior = std::make_unique<prior::BodyPrior>(
+          prior::WalkerPrior(simulator, table.entries[i].gait, prior_options), options.person_height_m,
+          table.body.leg_length_per_height, grid.gravity, options.ground_slope_rad);
+      gait.speed_kmh = grid.speeds_kmh[cell[0]] * froude_speed;
+      gait.step_length_m = grid.step_lengths_m[cell[1]] * step_scale;
+      gait.slope = static_cast<int>(b);
+      bank_.push_back(std::move(gait));
+    }
+    lattices_.push_back(gaitLattice(table, slope, bank_.begin() + first, bank_.end(), froude_speed, step_scale));
   }
   shape_ = bank_.front().prior->shape();
   for (const body::BodyPart part : {body::kTorsoPart, body::kLeftThighPart, body::kRightThighPart}) {
@@ -86,33 +100,41 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
     for (double* breadth : {&p.proximal_width_m, &p.proximal_depth_m, &p.distal_width_m, &p.distal_depth_m})
       *breadth *= options.person_breadth_scale;
   }
-  // The targets' lattice over the bank's speeds and steps, 0.1 km/h and 1 cm apart.
-  const auto [slowest, fastest] = std::minmax_element(
-      bank_.begin(), bank_.end(), [](const BankGait& a, const BankGait& b) { return a.speed_kmh < b.speed_kmh; });
+}
+
+Tracker::GaitLattice Tracker::gaitLattice(const gait::GaitTable& table, int slope,
+                                          std::vector<BankGait>::const_iterator begin,
+                                          std::vector<BankGait>::const_iterator end, double froude_speed,
+                                          double step_scale) {
+  const gait::GaitGrid& grid = table.grid;
+  // The targets' lattice over these bank gaits' speeds and steps, 0.1 km/h and 1 cm apart.
+  const auto [slowest, fastest] =
+      std::minmax_element(begin, end, [](const BankGait& a, const BankGait& b) { return a.speed_kmh < b.speed_kmh; });
   const auto [shortest, longest] = std::minmax_element(
-      bank_.begin(), bank_.end(), [](const BankGait& a, const BankGait& b) { return a.step_length_m < b.step_length_m; });
-  lattice_.speed0_kmh = slowest->speed_kmh;
-  lattice_.step0_m = shortest->step_length_m;
-  lattice_.speed_step_kmh = 0.1;
-  lattice_.step_step_m = 0.01;
-  lattice_.speeds = 1 + static_cast<int>(std::round((fastest->speed_kmh - lattice_.speed0_kmh) / lattice_.speed_step_kmh));
-  lattice_.steps = 1 + static_cast<int>(std::round((longest->step_length_m - lattice_.step0_m) / lattice_.step_step_m));
-  lattice_.gaits.resize(static_cast<size_t>(lattice_.speeds) * lattice_.steps);
-  lattice_.walkable.assign(lattice_.gaits.size(), 0);
-  for (int v = 0; v < lattice_.speeds; ++v)
-    for (int l = 0; l < lattice_.steps; ++l) {
-      const double speed_kmh = std::min(fastest->speed_kmh, lattice_.speed0_kmh + v * lattice_.speed_step_kmh);
-      const double step_m = std::min(longest->step_length_m, lattice_.step0_m + l * lattice_.step_step_m);
+      begin, end, [](const BankGait& a, const BankGait& b) { return a.step_length_m < b.step_length_m; });
+  GaitLattice lattice;
+  lattice.speed0_kmh = slowest->speed_kmh;
+  lattice.step0_m = shortest->step_length_m;
+  lattice.speed_step_kmh = 0.1;
+  lattice.step_step_m = 0.01;
+  lattice.speeds = 1 + static_cast<int>(std::round((fastest->speed_kmh - lattice.speed0_kmh) / lattice.speed_step_kmh));
+  lattice.steps = 1 + static_cast<int>(std::round((longest->step_length_m - lattice.step0_m) / lattice.step_step_m));
+  lattice.gaits.resize(static_cast<size_t>(lattice.speeds) * lattice.steps);
+  lattice.walkable.assign(lattice.gaits.size(), 0);
+  for (int v = 0; v < lattice.speeds; ++v)
+    for (int l = 0; l < lattice.steps; ++l) {
+      const double speed_kmh = std::min(fastest->speed_kmh, lattice.speed0_kmh + v * lattice.speed_step_kmh);
+      const double step_m = std::min(longest->step_length_m, lattice.step0_m + l * lattice.step_step_m);
       gait::InterpolationNote note;
-      const size_t k = static_cast<size_t>(v) * lattice_.steps + l;
+      const size_t k = static_cast<size_t>(v) * lattice.steps + l;
       // In the table's units, inside its grid (the scaling back may round past its ends).
       const double table_speed_kmh = std::clamp(speed_kmh / froude_speed, grid.speeds_kmh.front(), grid.speeds_kmh.back());
       const double table_step_m =
           std::clamp(step_m / step_scale, grid.step_lengths_m.front(), grid.step_lengths_m.back());
-      lattice_.gaits[k] =
-          gait::interpolateGait(table, table_speed_kmh, table_step_m, grid.slopes_rad[slope], &note).controls;
-      lattice_.walkable[k] = note.nearest < 0;
+      lattice.gaits[k] = gait::interpolateGait(table, table_speed_kmh, table_step_m, grid.slopes_rad[slope], &note).controls;
+      lattice.walkable[k] = note.nearest < 0;
     }
+  return lattice;
 }
 
 int Tracker::GaitLattice::at(double speed_kmh, double step_m) const {
@@ -124,15 +146,25 @@ int Tracker::GaitLattice::at(double speed_kmh, double step_m) const {
 }
 
 void Tracker::changeGait(TrackerParticle& p, common::Random& random) const {
-  if (options_.gait_speed_sd_kmh == 0 && options_.gait_step_sd_m == 0) return;
+  const bool slopes_change = gait_slopes_rad_.size() > 1 && options_.gait_slope_change_probability > 0;
+  if (options_.gait_speed_sd_kmh == 0 && options_.gait_step_sd_m == 0 && !slopes_change) return;
   std::normal_distribution<double> normal(0.0, 1.0);
   const double speed_kmh = p.target_speed_kmh + options_.gait_speed_sd_kmh * normal(random);
   const double step_m = p.target_step_m + options_.gait_step_sd_m * normal(random);
-  const int k = lattice_.at(speed_kmh, step_m);
+  // On a hill the target may also step to a neighbouring slope's gaits (a slope past the bank's
+  // ends: it stays). Drawn only then, so that level tracks draw the same numbers as before.
+  int slope = p.gait_slope;
+  if (slopes_change && std::bernoulli_distribution(options_.gait_slope_change_probability)(random)) {
+    const int to = slope + (std::bernoulli_distribution(0.5)(random) ? 1 : -1);
+    if (to >= 0 && to < static_cast<int>(gait_slopes_rad_.size())) slope = to;
+  }
+  const GaitLattice& lattice = lattices_[slope];
+  const int k = lattice.at(speed_kmh, step_m);
   if (k < 0) return;  // outside the gaits the particles may walk: the target stays
+  p.gait_slope = slope;
   p.target_speed_kmh = speed_kmh;
   p.target_step_m = step_m;
-  prior::walkGait(p.body.walker, lattice_.gaits[k]);
+  prior::walkGait(p.body.walker, lattice.gaits[k]);
 }
 
 Tracker::~Tracker() = default;
@@ -303,6 +335,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
         const BankGait& gait = bank_[gaits[std::uniform_int_distribution<int>(0, static_cast<int>(gaits.size()) - 1)(random)]];
         p.target_speed_kmh = gait.speed_kmh;
         p.target_step_m = gait.step_length_m;
+        p.gait_slope = gait.slope;
         std::normal_distribution<double> normal(0.0, 1.0);
         const double phase = std::uniform_real_distribution<double>(0.0, 1.0)(random);
         const Eigen::Vector2d at = guess.position_m + guess.position_sd_m * Eigen::Vector2d(normal(random), normal(random));
@@ -426,7 +459,7 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   e.walker.qdot /= prior.naturalTimeS();
   e.walker.time_in_stride *= prior.naturalTimeS();
   e.walker.stance_foot_x *= prior.legLengthM();
-  e.gait_slope_rad = prior.slopeRad();
+  e.gait_slope_rad = gait_slopes_rad_[particles[best].gait_slope];
   {
     // The walker's units are the body mass M, the leg length L and the natural time T = √(L/g):
     // a torque is M g L, a damping M g L T, an impulse M L / T.

@@ -54,6 +54,11 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "spread of a particle's target speed's step at a heel strike, km/h");
   checkRange(problems, "gait_step_sd_m", o.gait_step_sd_m, 0.0, 0.5,
              "spread of a particle's target step length's step at a heel strike, m");
+  checkRange(problems, "gait_slope_change_probability", o.gait_slope_change_probability, 0.0, 1.0,
+             "chance per heel strike that a particle's gait moves to a neighbouring slope's on a hill");
+  if (o.hill_gaits != HillGaits::kNearest && o.hill_gaits != HillGaits::kLevelToNearest)
+    problems.push_back("hill_gaits = " + std::to_string(static_cast<int>(o.hill_gaits)) +
+                       " is not a HillGaits value (nearest or level_to_nearest)");
   checkRange(problems, "person_breadth_scale", o.person_breadth_scale, 0.5, 3.0,
              "factor on the torso's and thighs' breadth");
   checkRange(problems, "lost_likelihood_fraction", o.lost_likelihood_fraction, 0.0, 1.0,

@@ -84,17 +84,60 @@ TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
 
 // The particles walk the gaits of the table's slope nearest the ground's that has gaits: the
 // prior's table reaches 10° downhill but has none uphill beyond 4.3°, so a 7° or 10° climb
-// walks the 4.3° gaits, and a 6° descent the 7.16° ones.
-TEST(Tracker, WalksTheNearestSlopeThatHasGaits) {
+// walks the 4.3° gaits, and a 6° descent the 7.16° ones. By default (HillGaits::kLevelToNearest)
+// also those of every slope between that one and the level.
+TEST(Tracker, WalksTheNearestSlopeThatHasGaitsAndThoseBetweenItAndTheLevel) {
   const double deg = M_PI / 180;
-  for (const auto& [ground_deg, gait_deg] :
-       {std::pair<double, double>{0, 0}, {4.3, 4.3}, {7, 4.3}, {10, 4.3}, {-6, -0.125 / deg}, {-10, -10}}) {
+  const double d2 = 0.037524578917878082, d4 = 0.075049157835756164;  // the table's ±2.15° and ±4.3°
+  struct Case {
+    double ground_deg;
+    std::vector<double> level_to_nearest;  // rad; the nearest is the one farthest from the level
+  };
+  for (const Case& c : {Case{0, {0}}, Case{4.3, {0, d2, d4}}, Case{7, {0, d2, d4}}, Case{10, {0, d2, d4}},
+                        Case{1, {0}}, Case{-6, {-0.125, -d4, -d2, 0}}, Case{-10, {-10 * deg, -0.125, -d4, -d2, 0}}}) {
     TrackerOptions options;
-    options.ground_slope_rad = ground_deg * deg;
-    const auto tracker = makeTracker(10, 1, 70.0, options);
-    EXPECT_NEAR(tracker->gaitSlopeRad(), gait_deg * deg, 1e-12) << ground_deg << "°";
-    EXPECT_GT(tracker->gaitCount(), 0) << ground_deg << "°";
+    options.ground_slope_rad = c.ground_deg * deg;
+    const auto between = makeTracker(10, 1, 70.0, options);
+    ASSERT_EQ(between->gaitSlopesRad().size(), c.level_to_nearest.size()) << c.ground_deg << "°";
+    for (size_t i = 0; i < c.level_to_nearest.size(); ++i)
+      EXPECT_NEAR(between->gaitSlopesRad()[i], c.level_to_nearest[i], 1e-12) << c.ground_deg << "° slope " << i;
+    options.hill_gaits = HillGaits::kNearest;
+    const auto nearest = makeTracker(10, 1, 70.0, options);
+    const double farthest_from_level = c.ground_deg >= 0 ? c.level_to_nearest.back() : c.level_to_nearest.front();
+    ASSERT_EQ(nearest->gaitSlopesRad().size(), 1u) << c.ground_deg << "°";
+    EXPECT_NEAR(nearest->gaitSlopesRad()[0], farthest_from_level, 1e-12) << c.ground_deg << "°";
+    EXPECT_LT(nearest->gaitCount(), between->gaitCount() + (c.level_to_nearest.size() == 1 ? 1 : 0)) << c.ground_deg << "°";
   }
+}
+
+// On a hill a particle's gait may move to a neighbouring slope's at its heel strikes: every
+// particle walks the gait of the slope it says it walks (its controls are that slope's), and
+// the particles spread over the bank's slopes; held on one slope (probability 0, nearest only)
+// they all walk its gaits.
+TEST(Tracker, OnAHillTheParticlesGaitsMoveBetweenSlopesAtHeelStrikes) {
+  auto slopesWalked = [](HillGaits hill_gaits, double probability) {
+    TrackerOptions options;
+    options.ground_slope_rad = 0.1;  // nearest with gaits: 4.3°; between it and the level: 0 and 2.15°
+    options.hill_gaits = hill_gaits;
+    options.gait_slope_change_probability = probability;
+    const auto tracker = makeTracker(300, 1, 70.0, options);
+    const test::RenderedWalk& s = scene();
+    tracker->start(s.frames[0], 0.0, coarseStart());
+    std::set<int> slopes;
+    int after_a_strike = 0;
+    for (size_t f = 1; f < s.frames.size(); ++f) {
+      tracker->track(s.frames[f], 0.1 * f);
+      for (const TrackerParticle& p : tracker->particles()) {
+        EXPECT_EQ(p.body.walker.gait.ground_slope, tracker->gaitSlopesRad().at(p.gait_slope)) << "frame " << f;
+        slopes.insert(p.gait_slope);
+        after_a_strike += p.body.walker.walker.heel_strikes > 0;
+      }
+    }
+    EXPECT_GT(after_a_strike, 0);
+    return slopes;
+  };
+  EXPECT_EQ(slopesWalked(HillGaits::kNearest, 0.0), std::set<int>{0});
+  EXPECT_EQ(slopesWalked(HillGaits::kLevelToNearest, 1.0), (std::set<int>{0, 1, 2}));
 }
 
 // person_breadth_scale broadens the projected torso and thighs (width and depth), nothing else.

@@ -35,8 +35,10 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.gait_step_sd_m = -0.01;
   options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
   options.initial_oversampling = 0;
+  options.gait_slope_change_probability = std::numeric_limits<double>::quiet_NaN();
+  options.hill_gaits = static_cast<HillGaits>(7);
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 10u);
+  EXPECT_EQ(problems.size(), 12u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
@@ -47,6 +49,8 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   EXPECT_TRUE(mentions(problems, "gait_step_sd_m = -0.01"));
   EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
   EXPECT_TRUE(mentions(problems, "initial_oversampling = 0 is outside [1, 1000]"));
+  EXPECT_TRUE(mentions(problems, "gait_slope_change_probability = nan is outside [0, 1]"));
+  EXPECT_TRUE(mentions(problems, "hill_gaits = 7 is not a HillGaits value"));
 }
 
 TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {

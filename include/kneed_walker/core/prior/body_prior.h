@@ -31,6 +31,8 @@ class BodyPrior {
   // that ground's frame, a kinematic stand-in for the gait there: the legs keep their angles to
   // the ground's normal (the feet stay on it) and the torso its angle to its rest, which the
   // prior's torso_rest_per_slope sets at the ground's slope (so a steeper climb leans it more).
+  // The turn is by the slope of the gait each particle walks (WalkerParticle::gait), which may
+  // be another slope's than this prior's own gait (a tracker's particles on level and hill gaits).
   BodyPrior(const WalkerPrior& walker_prior, double person_height_m, double leg_length_per_height,
             double gravity, std::optional<double> ground_slope_rad = std::nullopt);
 
@@ -62,7 +64,7 @@ class BodyPrior {
   WalkerPrior walker_prior_;
   body::BodyShape shape_;
   double ground_slope_rad_;
-  double torso_turn_rad_;  // added to the walker's torso angle in the ground's frame
+  double torso_rest_per_slope_;  // the prior's: the torso's rest angle per rad of slope
   double leg_length_m_, natural_time_s_, along_xy_m_, foot_radius_m_;
 };
 

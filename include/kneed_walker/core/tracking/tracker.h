@@ -59,6 +59,7 @@ struct TrackerParticle {
   prior::BodyParticle body;  // its walker walks around the gait of its target (body.walker.gait)
   // The target gait: the person's speed, km/h, and step length, m (TrackerOptions::gait_speed_sd_kmh).
   double target_speed_kmh = 0, target_step_m = 0;
+  int gait_slope = 0;  // the slope its gaits walk: an index into Tracker::gaitSlopesRad()
   vision::BodyImageAxes axes;                     // its parts' image axes at the last frame (for flow)
   std::array<Eigen::Vector3f, body::kNumBodyJoints> joints;  // its joints at the last frame, world, m
   float log_likelihood = 0;                       // of the last frame
@@ -158,8 +159,9 @@ class Tracker {
   const TrackerTiming& timing() const { return timing_; }
   // The table's gaits a track's particles start on (its grid points the options allow).
   int gaitCount() const { return static_cast<int>(bank_.size()); }
-  // The slope of those gaits, rad: the table's nearest the ground's that has any.
-  double gaitSlopeRad() const { return gait_slope_rad_; }
+  // The slopes of those gaits, rad, ascending: the table's nearest the ground's that has any,
+  // and with TrackerOptions::hill_gaits every slope between it and the level that has any.
+  const std::vector<double>& gaitSlopesRad() const { return gait_slopes_rad_; }
   // The pose of a particle (world, metres).
   body::BodyPose pose(const TrackerParticle& particle) const;
   // Its parts' image outlines.
@@ -176,6 +178,7 @@ class Tracker {
   struct BankGait {
     std::unique_ptr<prior::BodyPrior> prior;
     double speed_kmh = 0, step_length_m = 0;  // the person's, by Froude scaling
+    int slope = 0;                            // index into gait_slopes_rad_
   };
   // The gaits the particles' targets may move through: the table interpolated at the bank's
   // slope on a fine lattice of the person's speeds and step lengths over the bank's range, so
@@ -188,6 +191,10 @@ class Tracker {
     // The lattice point nearest (speed, step), or −1 outside the lattice or where not walkable.
     int at(double speed_kmh, double step_m) const;
   };
+  // The lattice of the grid's slope `slope` over the speeds and steps of the bank gaits
+  // [begin, end), which walk it; the factors scale the table's axes to the person's.
+  static GaitLattice gaitLattice(const gait::GaitTable& table, int slope, std::vector<BankGait>::const_iterator begin,
+                                 std::vector<BankGait>::const_iterator end, double froude_speed, double step_scale);
   // Every particle's transition and pose (a bank gait's prior: they differ only in the gait
   // their particles start on, and a particle carries the gait it walks).
   const prior::BodyPrior& bodyPrior() const { return *bank_.front().prior; }
@@ -208,8 +215,8 @@ class Tracker {
   TrackerOptions options_;
   vision::LikelihoodOptions likelihood_;
   std::vector<BankGait> bank_;
-  double gait_slope_rad_ = 0;
-  GaitLattice lattice_;
+  std::vector<double> gait_slopes_rad_;  // the bank's slopes, ascending
+  std::vector<GaitLattice> lattices_;    // one per slope of gait_slopes_rad_
   body::BodyShape shape_;  // the gaits' body shape, with the options' breadth
   vision::BackgroundModel background_;
   vision::AppearanceModel appearance_;
