@@ -136,6 +136,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   reader.read("person_breadth_scale", t.person_breadth_scale);
   reader.read("gait_speed_sd_kmh", t.gait_speed_sd_kmh);
   reader.read("gait_step_sd_m", t.gait_step_sd_m);
+  reader.read("gait_change_persistence", t.gait_change_persistence);
   reader.read("lost_likelihood_fraction", t.lost_likelihood_fraction);
   reader.read("gait_slope_change_probability", t.gait_slope_change_probability);
   std::string hill_gaits = t.hill_gaits == core::tracking::HillGaits::kNearest ? "nearest" : "level_to_nearest";

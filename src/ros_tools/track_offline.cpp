@@ -250,6 +250,10 @@ int main(int argc, char** argv) {
   app.add_option("--gait-step-sd", options.gait_step_sd_m,
                  "step changes: the spread of a particle's target step length's random step at each heel strike, m")
       ->capture_default_str()->check(FiniteRange(0.0, 0.5));
+  app.add_option("--gait-change-persistence", options.gait_change_persistence,
+                 "speed and step changes: the fraction of a particle's last target step carried into its next at a heel strike "
+                 "(0: independent steps; 0.8 for people who change speed)")
+      ->capture_default_str()->check(FiniteRange(0.0, 0.95));
   app.add_option("--lost-fraction", options.lost_likelihood_fraction,
                  "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its "
                  "recent median (0: below 0 only)")

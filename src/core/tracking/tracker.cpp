@@ -145,12 +145,21 @@ int Tracker::GaitLattice::at(double speed_kmh, double step_m) const {
   return walkable[k] ? k : -1;
 }
 
+TargetGait movedTarget(const TargetGait& target, const TrackerOptions& options, common::Random& random) {
+  const double persistence = options.gait_change_persistence;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  TargetGait moved;
+  moved.speed_change_kmh = persistence * target.speed_change_kmh + options.gait_speed_sd_kmh * normal(random);
+  moved.step_change_m = persistence * target.step_change_m + options.gait_step_sd_m * normal(random);
+  moved.speed_kmh = target.speed_kmh + moved.speed_change_kmh;
+  moved.step_m = target.step_m + moved.step_change_m;
+  return moved;
+}
+
 void Tracker::changeGait(TrackerParticle& p, common::Random& random) const {
   const bool slopes_change = gait_slopes_rad_.size() > 1 && options_.gait_slope_change_probability > 0;
   if (options_.gait_speed_sd_kmh == 0 && options_.gait_step_sd_m == 0 && !slopes_change) return;
-  std::normal_distribution<double> normal(0.0, 1.0);
-  const double speed_kmh = p.target_speed_kmh + options_.gait_speed_sd_kmh * normal(random);
-  const double step_m = p.target_step_m + options_.gait_step_sd_m * normal(random);
+  const TargetGait moved = movedTarget(p.target, options_, random);
   // On a hill the target may also step to a neighbouring slope's gaits (a slope past the bank's
   // ends: it stays). Drawn only then, so that level tracks draw the same numbers as before.
   int slope = p.gait_slope;
@@ -159,11 +168,13 @@ void Tracker::changeGait(TrackerParticle& p, common::Random& random) const {
     if (to >= 0 && to < static_cast<int>(gait_slopes_rad_.size())) slope = to;
   }
   const GaitLattice& lattice = lattices_[slope];
-  const int k = lattice.at(speed_kmh, step_m);
-  if (k < 0) return;  // outside the gaits the particles may walk: the target stays
+  const int k = lattice.at(moved.speed_kmh, moved.step_m);
+  if (k < 0) {  // outside the gaits the particles may walk: the target stays, and stops moving
+    p.target.speed_change_kmh = p.target.step_change_m = 0;
+    return;
+  }
   p.gait_slope = slope;
-  p.target_speed_kmh = speed_kmh;
-  p.target_step_m = step_m;
+  p.target = moved;
   prior::walkGait(p.body.walker, lattice.gaits[k]);
 }
 
@@ -333,8 +344,8 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
       [&](common::Random& random) {
         TrackerParticle p;
         const BankGait& gait = bank_[gaits[std::uniform_int_distribution<int>(0, static_cast<int>(gaits.size()) - 1)(random)]];
-        p.target_speed_kmh = gait.speed_kmh;
-        p.target_step_m = gait.step_length_m;
+        p.target.speed_kmh = gait.speed_kmh;
+        p.target.step_m = gait.step_length_m;
         p.gait_slope = gait.slope;
         std::normal_distribution<double> normal(0.0, 1.0);
         const double phase = std::uniform_real_distribution<double>(0.0, 1.0)(random);
@@ -452,7 +463,7 @@ TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   e.pose = pose(particles[best]);
   e.map_log_likelihood = particles[best].log_likelihood;
   e.lost = loss_.lost();
-  e.speed_kmh = particles[best].target_speed_kmh;
+  e.speed_kmh = particles[best].target.speed_kmh;
   e.heading_rad = particles[best].body.placement.value.heading_rad;
   const prior::BodyPrior& prior = bodyPrior();
   e.walker = particles[best].body.walker.walker;

@@ -54,6 +54,8 @@ std::vector<std::string> validate(const TrackerOptions& o) {
              "spread of a particle's target speed's step at a heel strike, km/h");
   checkRange(problems, "gait_step_sd_m", o.gait_step_sd_m, 0.0, 0.5,
              "spread of a particle's target step length's step at a heel strike, m");
+  checkRange(problems, "gait_change_persistence", o.gait_change_persistence, 0.0, 0.95,
+             "fraction of a target's last step carried into its next at a heel strike");
   checkRange(problems, "gait_slope_change_probability", o.gait_slope_change_probability, 0.0, 1.0,
              "chance per heel strike that a particle's gait moves to a neighbouring slope's on a hill");
   if (o.hill_gaits != HillGaits::kNearest && o.hill_gaits != HillGaits::kLevelToNearest)

@@ -178,8 +178,8 @@ TEST(Tracker, TargetGaitsRandomWalkAtHeelStrikesWithinTheTablesGaits) {
     for (size_t f = 1; f < s.frames.size(); ++f) {
       seen.insert(tracker->track(s.frames[f], 0.1 * f).speed_kmh);
       for (const TrackerParticle& p : tracker->particles()) {
-        *slowest = std::min(*slowest, p.target_speed_kmh);
-        *fastest = std::max(*fastest, p.target_speed_kmh);
+        *slowest = std::min(*slowest, p.target.speed_kmh);
+        *fastest = std::max(*fastest, p.target.speed_kmh);
       }
     }
     return seen;
@@ -195,6 +195,74 @@ TEST(Tracker, TargetGaitsRandomWalkAtHeelStrikesWithinTheTablesGaits) {
   // The default gaits are the paper's grid: 3-7 km/h for the table's 1.75 m person (this one).
   EXPECT_GE(slowest, 3.0 - 0.05);
   EXPECT_LE(fastest, 7.0 + 0.05);
+}
+
+// A target's move at a heel strike. At persistence 0 the random walk of independent N(0, sd²)
+// steps (the same draws as before the option); at persistence ρ each step carries ρ of the
+// last, so consecutive steps correlate by ρ and spread by sd / √(1 − ρ²); with sd 0 a slowing
+// target keeps slowing, by ρ of its last step each time.
+TEST(Tracker, ATargetsStepsCarryThePersistenceOfTheLastStep) {
+  struct Chain {
+    double correlation, sd_kmh, step_sd_m;
+  };
+  auto chain = [](double persistence) {
+    TrackerOptions options;
+    options.gait_speed_sd_kmh = 0.6;
+    options.gait_step_sd_m = 0.05;
+    options.gait_change_persistence = persistence;
+    common::Random random(11);
+    TargetGait target{4.5, 0.7, 0, 0};
+    double sum = 0, sum_sq = 0, sum_lag = 0, step_sq = 0;
+    const int moves = 40000;
+    for (int i = 0; i < moves; ++i) {
+      const TargetGait moved = movedTarget(target, options, random);
+      EXPECT_DOUBLE_EQ(moved.speed_kmh, target.speed_kmh + moved.speed_change_kmh);
+      EXPECT_DOUBLE_EQ(moved.step_m, target.step_m + moved.step_change_m);
+      sum += moved.speed_change_kmh;
+      sum_sq += moved.speed_change_kmh * moved.speed_change_kmh;
+      sum_lag += moved.speed_change_kmh * target.speed_change_kmh;
+      step_sq += moved.step_change_m * moved.step_change_m;
+      target = moved;
+      target.speed_kmh = 4.5, target.step_m = 0.7;  // the lattice would hold it in range
+    }
+    const double mean = sum / moves, variance = sum_sq / moves - mean * mean;
+    const Chain c{(sum_lag / moves - mean * mean) / variance, std::sqrt(variance), std::sqrt(step_sq / moves)};
+    std::cout << "persistence " << persistence << ": correlation " << c.correlation << ", sd " << c.sd_kmh
+              << " km/h, " << c.step_sd_m << " m\n";
+    return c;
+  };
+  const Chain walk = chain(0.0);
+  EXPECT_NEAR(walk.correlation, 0.0, 0.03);
+  EXPECT_NEAR(walk.sd_kmh, 0.6, 0.02);
+  EXPECT_NEAR(walk.step_sd_m, 0.05, 0.002);
+  const Chain persistent = chain(0.5);
+  EXPECT_NEAR(persistent.correlation, 0.5, 0.03);
+  EXPECT_NEAR(persistent.sd_kmh, 0.6 / std::sqrt(0.75), 0.02);
+  EXPECT_NEAR(persistent.step_sd_m, 0.05 / std::sqrt(0.75), 0.002);
+
+  // At persistence 0 a move is the random walk's: the target plus sd times a standard normal,
+  // the speed's drawn first, and nothing else drawn.
+  TrackerOptions walk_options;
+  walk_options.gait_speed_sd_kmh = 0.6;
+  walk_options.gait_step_sd_m = 0.05;
+  common::Random a(5), b(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const TargetGait moved = movedTarget(TargetGait{4.5, 0.7, -0.4, -0.02}, walk_options, a);
+  const double speed_normal = normal(b), step_normal = normal(b);
+  EXPECT_EQ(moved.speed_kmh, 4.5 + 0.6 * speed_normal);
+  EXPECT_EQ(moved.step_m, 0.7 + 0.05 * step_normal);
+  EXPECT_EQ(a(), b());
+
+  // No spread: a slowing target keeps slowing, each step half the last.
+  TrackerOptions carry;
+  carry.gait_speed_sd_kmh = carry.gait_step_sd_m = 0;
+  carry.gait_change_persistence = 0.5;
+  TargetGait slowing{6.5, 0.8, -0.4, -0.02};
+  for (const double expected_kmh : {6.3, 6.2, 6.15}) {
+    slowing = movedTarget(slowing, carry, a);
+    EXPECT_NEAR(slowing.speed_kmh, expected_kmh, 1e-12);
+  }
+  EXPECT_NEAR(slowing.step_m, 0.8 - 0.01 - 0.005 - 0.0025, 1e-12);
 }
 
 // A guard that fails when tracking breaks: 800 particles follow a 2 s walk. Measured 95 mm mean

@@ -33,12 +33,13 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.person_breadth_scale = 0.2;
   options.gait_speed_sd_kmh = std::numeric_limits<double>::quiet_NaN();
   options.gait_step_sd_m = -0.01;
+  options.gait_change_persistence = 1.0;
   options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
   options.initial_oversampling = 0;
   options.gait_slope_change_probability = std::numeric_limits<double>::quiet_NaN();
   options.hill_gaits = static_cast<HillGaits>(7);
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 12u);
+  EXPECT_EQ(problems.size(), 13u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
@@ -47,6 +48,7 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   EXPECT_TRUE(mentions(problems, "person_breadth_scale = 0.2"));
   EXPECT_TRUE(mentions(problems, "gait_speed_sd_kmh = nan"));
   EXPECT_TRUE(mentions(problems, "gait_step_sd_m = -0.01"));
+  EXPECT_TRUE(mentions(problems, "gait_change_persistence = 1 is outside [0, 0.95]"));
   EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
   EXPECT_TRUE(mentions(problems, "initial_oversampling = 0 is outside [1, 1000]"));
   EXPECT_TRUE(mentions(problems, "gait_slope_change_probability = nan is outside [0, 1]"));

@@ -54,11 +54,23 @@ struct InitialGuess {
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
                           const cv::Rect2d& box_px);
 
+// A particle's target gait (TrackerOptions::gait_speed_sd_kmh): the person's speed, km/h, and
+// step length, m, and the step each took at the particle's last heel strike.
+struct TargetGait {
+  double speed_kmh = 0, step_m = 0;
+  double speed_change_kmh = 0, step_change_m = 0;
+};
+
+// The target's move at a heel strike, before it is checked against the gaits the particles may
+// walk: each change is TrackerOptions::gait_change_persistence ρ times the last plus N(0, sd²)
+// (gait_speed_sd_kmh, gait_step_sd_m), a damped second-order random walk; at ρ = 0 the random
+// walk of independent steps. Draws two standard normals, the speed's first.
+TargetGait movedTarget(const TargetGait& target, const TrackerOptions& options, common::Random& random);
+
 // One particle.
 struct TrackerParticle {
   prior::BodyParticle body;  // its walker walks around the gait of its target (body.walker.gait)
-  // The target gait: the person's speed, km/h, and step length, m (TrackerOptions::gait_speed_sd_kmh).
-  double target_speed_kmh = 0, target_step_m = 0;
+  TargetGait target;
   int gait_slope = 0;  // the slope its gaits walk: an index into Tracker::gaitSlopesRad()
   vision::BodyImageAxes axes;                     // its parts' image axes at the last frame (for flow)
   std::array<Eigen::Vector3f, body::kNumBodyJoints> joints;  // its joints at the last frame, world, m
