@@ -35,8 +35,10 @@ class GaitProblem {
         coordinates_(coordinates),
         options_(options),
         n_(kNumControlVariables + coordinates.size()),
-        m_(coordinates.size() + 2) {
-    // c_ holds the m_ equalities of eq. 10, then the landing inequality.
+        m_(coordinates.size() + 2),
+        inequalities_(std::isfinite(options.min_passing_clearance) ? 2 : 1) {
+    // c_ holds the m_ equalities of eq. 10, then the inequalities: the landing impulse, and the
+    // swing's clearance if bounded.
     lower_.assign(n_, 0);
     upper_.assign(n_, 0);
     for (int i = 0; i < kNumControlVariables; ++i) {
@@ -65,6 +67,7 @@ class GaitProblem {
 
   int variables() const { return n_; }
   int equalityConstraints() const { return m_; }
+  int inequalityConstraints() const { return inequalities_; }
   const std::vector<double>& lower() const { return lower_; }
   const std::vector<double>& upper() const { return upper_; }
   int evaluations() const { return evaluations_; }
@@ -92,14 +95,15 @@ class GaitProblem {
   }
 
   // Objective and constraints at x (no gradients): eq. 10's equalities S(x0) − x0, V − v,
-  // L − ℓ in c[0, m_), and the landing's min_landing_impulse − impulse ≤ 0 in c[m_].
+  // L − ℓ in c[0, m_), then the inequalities (≤ 0): the landing's min_landing_impulse − impulse
+  // in c[m_] and, if bounded, the swing's min_passing_clearance − passing clearance in c[m_ + 1].
   double evaluate(const double* x, double* c) const {
     dynamics::WalkerControls controls;
     dynamics::WalkerState start;
     const dynamics::StrideResult stride = simulate(x, controls, start);
     if (!stride.completed) {
       // A fall: no periodic gait here. Large, finite values keep SLSQP's line search away.
-      for (int i = 0; i <= m_; ++i) c[i] = 10.0;
+      for (int i = 0; i < m_ + inequalities_; ++i) c[i] = 10.0;
       return 1e3;
     }
     const GaitVector end = coordinates_.reduce(stride.end);
@@ -107,6 +111,9 @@ class GaitProblem {
     c[m_ - 2] = stride.speed - target_.speed;
     c[m_ - 1] = stride.step_length - target_.step_length;
     c[m_] = options_.min_landing_impulse - stride.landing_impulse;
+    // A swing that never reaches the stance foot (+inf) clears it; capped to keep the
+    // differences finite.
+    if (inequalities_ > 1) c[m_ + 1] = options_.min_passing_clearance - std::min(stride.integrals.passing_clearance, 1.0);
     return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
   }
 
@@ -122,9 +129,9 @@ class GaitProblem {
     if (grad) std::copy(grad_c_.begin(), grad_c_.begin() + static_cast<size_t>(m_) * n_, grad);
   }
 
-  void landingValue(const double* x, double* c, double* grad) {
+  void inequalityValues(const double* x, double* c, double* grad) {
     refresh(x, grad != nullptr);
-    c[0] = c_[m_];
+    std::copy(c_.begin() + m_, c_.end(), c);
     if (grad) std::copy(grad_c_.begin() + static_cast<size_t>(m_) * n_, grad_c_.end(), grad);
   }
 
@@ -133,14 +140,14 @@ class GaitProblem {
     const bool same = !x_.empty() && std::equal(x_.begin(), x_.end(), x);
     if (!same) {
       x_.assign(x, x + n_);
-      c_.assign(m_ + 1, 0);
+      c_.assign(m_ + inequalities_, 0);
       f_ = evaluate(x, c_.data());
       has_gradient_ = false;
     }
     if (!need_gradient || has_gradient_) return;
     grad_f_.assign(n_, 0);
-    grad_c_.assign(static_cast<size_t>(m_ + 1) * n_, 0);
-    std::vector<double> probe = x_, c_plus(m_ + 1), c_minus(m_ + 1);
+    grad_c_.assign(static_cast<size_t>(m_ + inequalities_) * n_, 0);
+    std::vector<double> probe = x_, c_plus(m_ + inequalities_), c_minus(m_ + inequalities_);
     for (int j = 0; j < n_; ++j) {
       // Central differences, one-sided at a bound (ι ≥ 0 must stay ≥ 0).
       const double h = options_.difference_step * std::max(1.0, std::abs(x_[j]));
@@ -154,7 +161,7 @@ class GaitProblem {
       probe[j] = x_[j];
       const double width = up - down;
       grad_f_[j] = (f_plus - f_minus) / width;
-      for (int i = 0; i <= m_; ++i)
+      for (int i = 0; i < m_ + inequalities_; ++i)
         grad_c_[static_cast<size_t>(i) * n_ + j] = (c_plus[i] - c_minus[i]) / width;
     }
     has_gradient_ = true;
@@ -164,7 +171,7 @@ class GaitProblem {
   gait::GaitTarget target_;
   GaitCoordinates coordinates_;
   GaitOptimizerOptions options_;
-  int n_, m_;
+  int n_, m_, inequalities_;
   std::vector<double> lower_, upper_;
   mutable int evaluations_ = 0;
   std::vector<double> x_, c_, grad_f_, grad_c_;
@@ -181,9 +188,9 @@ void equalityCallback(unsigned, double* result, unsigned, const double* x, doubl
   static_cast<GaitProblem*>(data)->equalityValues(x, result, grad);
 }
 
-void landingCallback(unsigned, double* result, unsigned, const double* x, double* grad,
-                     void* data) {
-  static_cast<GaitProblem*>(data)->landingValue(x, result, grad);
+void inequalityCallback(unsigned, double* result, unsigned, const double* x, double* grad,
+                        void* data) {
+  static_cast<GaitProblem*>(data)->inequalityValues(x, result, grad);
 }
 
 }  // namespace
@@ -201,7 +208,7 @@ namespace {
 
 // The stride function the optimiser sees: a landing on a pulling ground and a swing foot
 // through the ground are simulated through (not falls), so that the landing constraint's value
-// goes on smoothly below zero and the scuff penalty sees the whole dip; feasible() refuses a
+// goes on smoothly below zero and the scuff penalty and clearance bound see the whole dip; feasible() refuses a
 // pulling landing and a swing through the ground that the runtime's simulator calls a fall.
 dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& proportions,
                                              const GaitOptimizerOptions& options) {
@@ -215,6 +222,7 @@ dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& pr
 // simulates it again as the prior does (options.simulation unchanged).
 void measure(OptimalGait& gait, const dynamics::WalkerSimulator& runtime, const GaitOptimizerOptions& options) {
   gait.walks_at_runtime = runtime.stride(gait.controls, gait.start).completed;
+  gait.clears_the_ground = gait.stride.integrals.passing_clearance >= options.min_passing_clearance - 1e-6;
   const gait::GaitTarget& target = gait.target;
   gait.effort = gaitEffort(gait.stride, gait.controls.toe_off_impulse, options.weights);
   gait.periodicity_residual =
@@ -241,8 +249,8 @@ OptimalGait optimizeInPattern(const dynamics::WalkerSimulator& sim, const dynami
   solver.add_equality_mconstraint(
       equalityCallback, &problem,
       std::vector<double>(problem.equalityConstraints(), options.constraint_tolerance));
-  solver.add_inequality_mconstraint(landingCallback, &problem,
-                                    std::vector<double>(1, options.constraint_tolerance));
+  solver.add_inequality_mconstraint(inequalityCallback, &problem,
+                                    std::vector<double>(problem.inequalityConstraints(), options.constraint_tolerance));
   solver.set_xtol_rel(options.relative_tolerance);
   solver.set_maxeval(options.max_iterations);
 

@@ -100,6 +100,35 @@ TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
   }
 }
 
+// The passing clearance is the swing sole's lowest height while the foot passes the stance
+// foot: McGeer's passive gait swings its foot between 0.01 L and 0.05 L above the ground there
+// (a stride near it measured 0.0121 L at the default step). The integrator's step ends sample it:
+// a step ten times finer finds the same height within 1e-4 L, and a narrower passing window
+// (fewer samples) no lower a height.
+TEST(WalkerSimulation, PassingClearanceIsTheSwingSolesLowestHeightNearTheStanceFoot) {
+  WalkerControls passive;
+  passive.ground_slope = -0.0456;
+  WalkerState s;
+  s.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
+  s.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
+  s.knee_on_limit = {true, false};
+  auto clearance = [&](double max_step, double window) {
+    SimulationOptions options;
+    options.max_step = max_step;
+    options.passing_window = window;
+    const StrideResult stride = WalkerSimulator(mcGeerPassiveWalker(), options).stride(passive, s);
+    EXPECT_TRUE(stride.completed);
+    return stride.integrals.passing_clearance;
+  };
+  const double at_default = clearance(SimulationOptions{}.max_step, SimulationOptions{}.passing_window);
+  std::cout << "passing clearance " << at_default << " L\n";
+  EXPECT_GT(at_default, 0.01);
+  EXPECT_LT(at_default, 0.05);
+  EXPECT_NEAR(clearance(SimulationOptions{}.max_step / 10, SimulationOptions{}.passing_window), at_default, 1e-4);
+  EXPECT_GE(clearance(SimulationOptions{}.max_step, 0.05), at_default);
+  EXPECT_EQ(clearance(SimulationOptions{}.max_step, 1e-9), std::numeric_limits<double>::infinity()) << "never passed";
+}
+
 TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
   // Random walkers land on a pulling ground often (a fall since issue 13); here, where the knee
   // limits are the subject, they walk on through such landings, so that many strides are seen.

@@ -114,6 +114,32 @@ TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
   EXPECT_TRUE(simulatedGait(table.body, harder, raised).feasible());
 }
 
+// The clearance inequality beside eq. 10 (GaitOptimizerOptions::min_passing_clearance, off by
+// default): the shipped level gait at 4.5 km/h, 0.7 m steps passes the stance foot with its
+// swing sole 0.0011 L below the ground (the soft scuff penalty lets it). It is feasible without
+// the bound and not with one at -0.0005 L, from which the optimiser finds a gait that clears it.
+TEST(OptimalGaits, HoldsTheSwingSoleAboveTheClearanceBound) {
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  const gait::GaitTarget level = table.grid.target(4.5, 0.7, 0);
+  const gait::GaitTableEntry& shipped = entryAt(table, level);
+  ASSERT_TRUE(shipped.feasible);
+  const OptimalGait as_shipped = simulatedGait(table.body, shipped.gait);
+  ASSERT_TRUE(as_shipped.feasible());
+  EXPECT_LT(as_shipped.stride.integrals.passing_clearance, -0.001);
+  GaitOptimizerOptions bounded;
+  bounded.min_passing_clearance = -0.0005;
+  const OptimalGait scraping = simulatedGait(table.body, shipped.gait, bounded);
+  EXPECT_FALSE(scraping.clears_the_ground);
+  EXPECT_FALSE(scraping.feasible());
+  const OptimalGait lifted = optimizeGait(table.body, level, shipped.gait, bounded);
+  std::cout << "passing clearance (effort): shipped " << as_shipped.stride.integrals.passing_clearance << " ("
+            << as_shipped.effort << "), bound -0.0005: " << lifted.stride.integrals.passing_clearance << " ("
+            << lifted.effort << ")\n";
+  ASSERT_TRUE(lifted.feasible()) << "residual " << lifted.periodicity_residual;
+  EXPECT_GE(lifted.stride.integrals.passing_clearance, bounded.min_passing_clearance - 1e-6);
+  EXPECT_TRUE(simulatedGait(table.body, lifted, bounded).feasible());
+}
+
 // A solve whose stride diverged (NaN speed and step length, unbounded effort) is recorded so
 // that the table still loads: optimize_gaits wrote such an entry once, and neither --resume
 // nor any reader could open the table again.

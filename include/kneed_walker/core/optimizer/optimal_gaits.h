@@ -7,6 +7,7 @@
 // Froude similarity (speed × √(gL), step length × L, time × √(L/g)).
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,7 +38,9 @@ struct EffortWeights {
   double torque_unit_scale = 132.3;  // weight of the torque terms against the impulse term
   // Penalty on a swing foot passing lower than SimulationOptions::clearance_margin (per unit
   // of TorqueIntegrals::scuff / T): not in the paper, whose walker presumably cleared the
-  // ground; without it the cheapest swing is a straight leg through the ground.
+  // ground; without it the cheapest swing is a straight leg through the ground. The shipped
+  // tables were solved with it; GaitOptimizerOptions::min_passing_clearance is the hard
+  // constraint meant to replace it (issue 13).
   double scuff = 1e5;
 };
 
@@ -60,11 +63,15 @@ struct OptimalGait : gait::Gait {
   // SimulationOptions::max_swing_penetration a fall (11 gaits of the ±10° tables, 0.015–0.045 L
   // below the ground as they pass the stance foot, were feasible without this).
   bool walks_at_runtime = false;
-  // Periodic, on target, landing on a ground that pushes (HeelStrike::physical()), and walked
-  // by the runtime's simulator.
+  // The swing sole passes the stance foot at least GaitOptimizerOptions::min_passing_clearance
+  // above the ground (within 1e-6 L: SLSQP meets an active bound to its tolerance); always
+  // true when that bound is off.
+  bool clears_the_ground = false;
+  // Periodic, on target, landing on a ground that pushes (HeelStrike::physical()), clearing the
+  // ground as it swings, and walked by the runtime's simulator.
   bool feasible() const {
     return stride.completed && !stride.pulling_heel_strike && periodicity_residual < 1e-6 &&
-           speed_error < 0.01 && step_length_error < 0.01 && walks_at_runtime;
+           speed_error < 0.01 && step_length_error < 0.01 && clears_the_ground && walks_at_runtime;
   }
 };
 
@@ -82,6 +89,14 @@ struct GaitOptimizerOptions {
   // Zero would be the physical limit; the margin keeps strides near the optimum, as noisy
   // particles take, from landing on a pulling ground.
   double min_landing_impulse = 0.01;
+  // When finite, the swing sole's lowest height while the foot passes the stance foot
+  // (TorqueIntegrals::passing_clearance) must be at least this, L: a second inequality beside
+  // eq. 10 (issue 13), so that an optimum clears the ground instead of scraping. Not in the
+  // paper. Off by default: the shipped tables are solved with the soft scuff penalty, under
+  // which 392 of the 798 free gaits dip below the ground (to -0.022 L). From those optima the
+  // bound moves a gait up to about the ground (a nearly straight swing leg passes the stance
+  // foot at about 0 whatever its springs), not to a bent knee's 0.01 L (README "Optimal cyclic gaits").
+  double min_passing_clearance = -std::numeric_limits<double>::infinity();
   dynamics::SimulationOptions simulation;      // of the stride function
 };
 
