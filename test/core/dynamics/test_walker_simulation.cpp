@@ -76,22 +76,31 @@ TEST(WalkerSimulation, PassiveStridesOnlyLoseEnergyAtEvents) {
   }
 }
 
+// A stride from near McGeer's passive gait: its slope and a state just after heel strike.
+struct PassiveStride {
+  WalkerControls controls;
+  WalkerState start;
+};
+PassiveStride nearMcGeersPassiveGait() {
+  PassiveStride stride;
+  stride.controls.ground_slope = -0.0456;
+  stride.start.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
+  stride.start.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
+  stride.start.knee_on_limit = {true, false};
+  return stride;
+}
+
 // The scuff integral counts a swing foot passing the stance foot lower than the margin: McGeer's
 // passive gait swings its foot between 0.01 L and 0.05 L above the ground (a stride from near
 // it measured: margin 0.01 costs 0, 0.05 costs 3.5e-4).
 TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
-  WalkerControls passive;
-  passive.ground_slope = -0.0456;
-  WalkerState s;
-  s.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
-  s.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
-  s.knee_on_limit = {true, false};
+  const PassiveStride passive = nearMcGeersPassiveGait();
   double previous = 0;
   for (double margin : {-1.0, 0.01, 0.05, 0.1}) {
     SimulationOptions options;
     options.clearance_margin = margin;
     const WalkerSimulator sim(mcGeerPassiveWalker(), options);
-    const StrideResult stride = sim.stride(passive, s);
+    const StrideResult stride = sim.stride(passive.controls, passive.start);
     ASSERT_TRUE(stride.completed);
     if (margin <= 0.01) EXPECT_EQ(stride.integrals.scuff, 0.0);
     if (margin >= 0.05) EXPECT_GT(stride.integrals.scuff, previous) << "a higher margin costs more";
@@ -106,17 +115,12 @@ TEST(WalkerSimulation, ScuffIntegralMeasuresALowPassingFoot) {
 // a step ten times finer finds the same height within 1e-4 L, and a narrower passing window
 // (fewer samples) no lower a height.
 TEST(WalkerSimulation, PassingClearanceIsTheSwingSolesLowestHeightNearTheStanceFoot) {
-  WalkerControls passive;
-  passive.ground_slope = -0.0456;
-  WalkerState s;
-  s.q << 0, 0.2708, 0.2708, -0.440701, -0.440701;
-  s.qdot << 0, -0.35545, -0.35545, 0.0645029, -0.62505;
-  s.knee_on_limit = {true, false};
+  const PassiveStride passive = nearMcGeersPassiveGait();
   auto clearance = [&](double max_step, double window) {
     SimulationOptions options;
     options.max_step = max_step;
     options.passing_window = window;
-    const StrideResult stride = WalkerSimulator(mcGeerPassiveWalker(), options).stride(passive, s);
+    const StrideResult stride = WalkerSimulator(mcGeerPassiveWalker(), options).stride(passive.controls, passive.start);
     EXPECT_TRUE(stride.completed);
     return stride.integrals.passing_clearance;
   };
