@@ -113,7 +113,8 @@ class GaitProblem {
     c[m_] = options_.min_landing_impulse - stride.landing_impulse;
     // A swing that never reaches the stance foot (+inf) clears it; capped to keep the
     // differences finite.
-    if (inequalities_ > 1) c[m_ + 1] = options_.min_passing_clearance - std::min(stride.integrals.passing_clearance, 1.0);
+    if (inequalities_ > 1)
+      c[m_ + 1] = options_.min_passing_clearance - std::min(stride.integrals.passing_clearance, 1.0);
     return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
   }
 
@@ -208,8 +209,9 @@ namespace {
 
 // The stride function the optimiser sees: a landing on a pulling ground and a swing foot
 // through the ground are simulated through (not falls), so that the landing constraint's value
-// goes on smoothly below zero and the scuff penalty and clearance bound see the whole dip; feasible() refuses a
-// pulling landing and a swing through the ground that the runtime's simulator calls a fall.
+// goes on smoothly below zero and the scuff penalty and the clearance bound see the whole dip;
+// feasible() refuses a pulling landing and a swing through the ground that the runtime's
+// simulator calls a fall.
 dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& proportions,
                                              const GaitOptimizerOptions& options) {
   dynamics::SimulationOptions simulation = options.simulation;
