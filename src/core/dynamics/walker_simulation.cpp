@@ -236,6 +236,7 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
         integrals->scuff += h * 0.5 * (scuffing(at_state) + scuffing(at_trial));  // trapezoid
         if (std::abs(at_trial.swing_foot_ahead) < window)
           integrals->passing_clearance = std::min(integrals->passing_clearance, at_trial.swing_clearance);
+        integrals->max_swing_knee_flexion = std::max(integrals->max_swing_knee_flexion, kneeFlexion(trial.q, 1));
       }
       state = trial;
       at_state = at_trial;

@@ -35,10 +35,11 @@ class GaitProblem {
         coordinates_(coordinates),
         options_(options),
         n_(kNumControlVariables + coordinates.size()),
-        m_(coordinates.size() + 2),
-        inequalities_(std::isfinite(options.min_passing_clearance) ? 2 : 1) {
+        m_(coordinates.size() + 2) {
     // c_ holds the m_ equalities of eq. 10, then the inequalities: the landing impulse, and the
-    // swing's clearance if bounded.
+    // swing's clearance and its knee's flexion if bounded.
+    if (std::isfinite(options.min_passing_clearance)) clearance_row_ = m_ + inequalities_++;
+    if (std::isfinite(options.max_swing_knee_flexion)) flexion_row_ = m_ + inequalities_++;
     lower_.assign(n_, 0);
     upper_.assign(n_, 0);
     for (int i = 0; i < kNumControlVariables; ++i) {
@@ -96,7 +97,8 @@ class GaitProblem {
 
   // Objective and constraints at x (no gradients): eq. 10's equalities S(x0) − x0, V − v,
   // L − ℓ in c[0, m_), then the inequalities (≤ 0): the landing's min_landing_impulse − impulse
-  // in c[m_] and, if bounded, the swing's min_passing_clearance − passing clearance in c[m_ + 1].
+  // in c[m_] and, if bounded, the swing's min_passing_clearance − passing clearance and its
+  // knee's flexion − max_swing_knee_flexion after it.
   double evaluate(const double* x, double* c) const {
     dynamics::WalkerControls controls;
     dynamics::WalkerState start;
@@ -113,8 +115,10 @@ class GaitProblem {
     c[m_] = options_.min_landing_impulse - stride.landing_impulse;
     // A swing that never reaches the stance foot (+inf) clears it; capped to keep the
     // differences finite.
-    if (inequalities_ > 1)
-      c[m_ + 1] = options_.min_passing_clearance - std::min(stride.integrals.passing_clearance, 1.0);
+    if (clearance_row_ >= 0)
+      c[clearance_row_] = options_.min_passing_clearance - std::min(stride.integrals.passing_clearance, 1.0);
+    if (flexion_row_ >= 0)
+      c[flexion_row_] = stride.integrals.max_swing_knee_flexion - options_.max_swing_knee_flexion;
     return gaitEffort(stride, controls.toe_off_impulse, options_.weights);
   }
 
@@ -172,7 +176,8 @@ class GaitProblem {
   gait::GaitTarget target_;
   GaitCoordinates coordinates_;
   GaitOptimizerOptions options_;
-  int n_, m_, inequalities_;
+  int n_, m_, inequalities_ = 1;
+  int clearance_row_ = -1, flexion_row_ = -1;  // rows of c_, -1 when unbounded
   std::vector<double> lower_, upper_;
   mutable int evaluations_ = 0;
   std::vector<double> x_, c_, grad_f_, grad_c_;
@@ -225,6 +230,7 @@ dynamics::WalkerSimulator optimiserSimulator(const dynamics::BodyProportions& pr
 void measure(OptimalGait& gait, const dynamics::WalkerSimulator& runtime, const GaitOptimizerOptions& options) {
   gait.walks_at_runtime = runtime.stride(gait.controls, gait.start).completed;
   gait.clears_the_ground = gait.stride.integrals.passing_clearance >= options.min_passing_clearance - 1e-6;
+  gait.knee_within_bound = gait.stride.integrals.max_swing_knee_flexion <= options.max_swing_knee_flexion + 1e-6;
   const gait::GaitTarget& target = gait.target;
   gait.effort = gaitEffort(gait.stride, gait.controls.toe_off_impulse, options.weights);
   gait.periodicity_residual =

@@ -133,6 +133,28 @@ TEST(WalkerSimulation, PassingClearanceIsTheSwingSolesLowestHeightNearTheStanceF
   EXPECT_EQ(clearance(SimulationOptions{}.max_step, 1e-9), std::numeric_limits<double>::infinity()) << "never passed";
 }
 
+// The swing knee's largest flexion over the stride, sampled at the integrator's step ends: on
+// McGeer's passive gait it is the peak of the swing knee's flexion as a fine walk through the
+// stride sees it (within the coarse step's sampling error), and a flexion the swing knee has
+// (it bends as it swings: more than 0.3 rad).
+TEST(WalkerSimulation, MaxSwingKneeFlexionIsThePeakOverTheStride) {
+  const PassiveStride passive = nearMcGeersPassiveGait();
+  const WalkerSimulator simulator(mcGeerPassiveWalker());
+  const StrideResult stride = simulator.stride(passive.controls, passive.start);
+  ASSERT_TRUE(stride.completed);
+  WalkerState state = passive.start;
+  double peak = 0;
+  const int samples = 2000;
+  for (int k = 0; k < samples && state.heel_strikes == 0; ++k) {
+    peak = std::max(peak, kneeFlexion(state.q, 1));
+    simulator.advance(passive.controls, state, stride.duration / samples);
+  }
+  std::cout << "swing knee peak " << stride.integrals.max_swing_knee_flexion << " rad, fine walk " << peak << " rad\n";
+  EXPECT_GT(stride.integrals.max_swing_knee_flexion, 0.3);
+  EXPECT_LE(stride.integrals.max_swing_knee_flexion, peak + 1e-6);
+  EXPECT_NEAR(stride.integrals.max_swing_knee_flexion, peak, 2e-3);
+}
+
 TEST(WalkerSimulation, KneeLimitsAreNeverViolatedOverManyRandomStrides) {
   // Random walkers land on a pulling ground often (a fall since issue 13); here, where the knee
   // limits are the subject, they walk on through such landings, so that many strides are seen.

@@ -46,6 +46,8 @@ struct TorqueIntegrals {
   // passing window), at the integrator's step ends, model length; +inf if it never passed.
   // Negative: the sole went through the ground, which the dynamics ignore.
   double passing_clearance = std::numeric_limits<double>::infinity();
+  // The swing knee's largest flexion over the stride, at the integrator's step ends, rad.
+  double max_swing_knee_flexion = 0;
 };
 
 // Step and event settings, in units of the model's natural time √(L/g) (0.31 s for a

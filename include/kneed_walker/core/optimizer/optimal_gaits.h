@@ -38,9 +38,9 @@ struct EffortWeights {
   double torque_unit_scale = 132.3;  // weight of the torque terms against the impulse term
   // Penalty on a swing foot passing lower than SimulationOptions::clearance_margin (per unit
   // of TorqueIntegrals::scuff / T): not in the paper, whose walker presumably cleared the
-  // ground; without it the cheapest swing is a straight leg through the ground. The shipped
-  // tables were solved with it; GaitOptimizerOptions::min_passing_clearance is the hard
-  // constraint meant to replace it (issue 13).
+  // ground; without it the cheapest swing is a straight leg through the ground. The prior's
+  // table is solved with it alone; the free table with GaitOptimizerOptions::
+  // min_passing_clearance as well, the hard constraint (issue 13), under which the penalty is 0.
   double scuff = 1e5;
 };
 
@@ -67,11 +67,15 @@ struct OptimalGait : gait::Gait {
   // above the ground (within 1e-6 L: SLSQP meets an active bound to its tolerance); always
   // true when that bound is off.
   bool clears_the_ground = false;
+  // The swing knee flexes at most GaitOptimizerOptions::max_swing_knee_flexion (within 1e-6
+  // rad); always true when that bound is off.
+  bool knee_within_bound = false;
   // Periodic, on target, landing on a ground that pushes (HeelStrike::physical()), clearing the
-  // ground as it swings, and walked by the runtime's simulator.
+  // ground as it swings, within the knee's bound, and walked by the runtime's simulator.
   bool feasible() const {
     return stride.completed && !stride.pulling_heel_strike && periodicity_residual < 1e-6 &&
-           speed_error < 0.01 && step_length_error < 0.01 && clears_the_ground && walks_at_runtime;
+           speed_error < 0.01 && step_length_error < 0.01 && clears_the_ground && knee_within_bound &&
+           walks_at_runtime;
   }
 };
 
@@ -92,11 +96,17 @@ struct GaitOptimizerOptions {
   // When finite, the swing sole's lowest height while the foot passes the stance foot
   // (TorqueIntegrals::passing_clearance) must be at least this, L: a second inequality beside
   // eq. 10 (issue 13), so that an optimum clears the ground instead of scraping. Not in the
-  // paper. Off by default: the shipped tables are solved with the soft scuff penalty, under
-  // which 392 of the 798 free gaits dip below the ground (to -0.022 L). From those optima the
-  // bound moves a gait up to about the ground (a nearly straight swing leg passes the stance
-  // foot at about 0 whatever its springs), not to a bent knee's 0.01 L (README "Optimal cyclic gaits").
+  // paper. The shipped free table is solved with 0.01 (gait::GaitTable::swing_bounds records
+  // it). From an optimum that swings a nearly straight leg (as under the soft scuff penalty
+  // alone) the bound lifts the foot only to about the ground: the table was grown from a seed
+  // gait whose swing knee is already bent at heel strike (README "Optimal cyclic gaits").
   double min_passing_clearance = -std::numeric_limits<double>::infinity();
+  // When finite, the swing knee's largest flexion over the stride
+  // (TorqueIntegrals::max_swing_knee_flexion) must be at most this, rad: a third inequality.
+  // The walker's knee has no flexion stop, and under the clearance bound 10 of the 53 level
+  // optima of the paper's grid fold the swing knee past 90 degrees (people's peak is about 60,
+  // Schwartz 2008); at 1.31 rad (75 degrees) none does. Not in the paper. Off by default.
+  double max_swing_knee_flexion = std::numeric_limits<double>::infinity();
   dynamics::SimulationOptions simulation;      // of the stride function
 };
 
