@@ -3,7 +3,8 @@
 //
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml [--resume]
 //                                      [--threads 0] [--retry-failed] [--max-attempts 4]
-//                                      [--prior-fixed] [--seed-table config/gait_table.yaml] [--min-passing-clearance L]
+//                                      [--prior-fixed] [--seed-table config/gait_table.yaml [--seed-only]]
+//                                      [--min-passing-clearance L] [--max-swing-knee-flexion rad]
 //                                      [--speeds 1.5,2,...,7] [--step-lengths 0.5,...,1] [--slopes -0.075,...,0.075]
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
@@ -13,8 +14,9 @@
 // other grid point is then solved warm-started from its already solved neighbours (the points
 // with the most solved neighbours first, on all cores; with --seed-table, that table's gait at
 // the point first), and where those fail, by continuation from the nearest neighbour through
-// the midpoint. The table is rewritten after every
-// gait, so an interrupted run continues with --resume.
+// the midpoint. A point that failed is tried again whenever neighbours have become feasible
+// since its last try. The table is rewritten after every gait, so an interrupted run continues
+// with --resume.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -23,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -154,6 +157,10 @@ int run(int argc, char** argv) {
                  "warm-start the seed point from this table's gait there instead of by continuation "
                  "from McGeer's passive gait, and try its gait at every point first (for --prior-fixed: "
                  "the free table's gaits reach points that no solved neighbour does)")->check(CLI::ExistingFile);
+  bool seed_only = false;
+  app.add_flag("--seed-only", seed_only,
+               "with --seed-table: take only its gait nearest the seed point, and build every other point from "
+               "the solved ones (the table grown from one gait)");
   app.add_option("--seed-speed", seed_speed, "seed grid point: speed, km/h")
       ->check(kneed_walker::tools::FiniteRange(0.1, 20))->capture_default_str();
   app.add_option("--seed-step", seed_step, "seed grid point: step length, m")
@@ -173,15 +180,29 @@ int run(int argc, char** argv) {
                  "paper's -4.3 to 4.3 degrees by 2.15)")
       ->delimiter(',')->check(kneed_walker::tools::FiniteRange(-0.3, 0.3));
   kw::optimizer::GaitOptimizerOptions options;
-  app.add_option("--min-passing-clearance", options.min_passing_clearance,
-                 "hold the swing sole at least this high while it passes the stance foot, leg lengths (a hard "
-                 "constraint beside eq. 10; off by default, the shipped tables use the soft scuff penalty); "
-                 "--resume and --merge then mark the table's gaits that pass lower failed")
-      ->check(kneed_walker::tools::FiniteRange(-0.05, 0.1));
+  CLI::Option* clearance_option =
+      app.add_option("--min-passing-clearance", options.min_passing_clearance,
+                     "hold the swing sole at least this high while it passes the stance foot, leg lengths (a hard "
+                     "constraint beside eq. 10; the table records it, and --resume and --merge take the table's "
+                     "unless given; off for a new table unless given; the shipped free table: 0.01); --resume and "
+                     "--merge mark the table's gaits that pass lower failed")
+          ->check(kneed_walker::tools::FiniteRange(-0.05, 0.1));
+  CLI::Option* flexion_option =
+      app.add_option("--max-swing-knee-flexion", options.max_swing_knee_flexion,
+                     "hold the swing knee's flexion at most this, rad (a third inequality, recorded and taken as "
+                     "--min-passing-clearance is; the walker's knee has no flexion stop, and under the clearance "
+                     "bound some optima fold it past 90 degrees; the shipped free table: 1.31)")
+          ->check(kneed_walker::tools::FiniteRange(0.1, 3.0));
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  // The swing bounds to solve with: those given, else (resuming or merging) the table's.
+  auto takeSwingBounds = [&](kw::gait::GaitTable& table) {
+    if (clearance_option->count() == 0) options.min_passing_clearance = table.swing_bounds.min_passing_clearance;
+    if (flexion_option->count() == 0) options.max_swing_knee_flexion = table.swing_bounds.max_swing_knee_flexion;
+    table.swing_bounds = {options.min_passing_clearance, options.max_swing_knee_flexion};
+  };
   for (const auto& [axis, name] : {std::pair{&speeds_kmh, "--speeds"}, std::pair{&step_lengths_m, "--step-lengths"},
                                    std::pair{&slopes_rad, "--slopes"}}) {
     if (axis->size() == 1) {
@@ -194,6 +215,10 @@ int run(int argc, char** argv) {
                      (*axis)[i - 1], (*axis)[i]);
         return 1;
       }
+  }
+  if (seed_only && seed_table.empty()) {
+    std::fprintf(stderr, "optimize_gaits: --seed-only needs --seed-table\n");
+    return 1;
   }
   threads = kw::common::resolveThreads(threads);
   kw::dynamics::BodyProportions proportions;
@@ -208,6 +233,8 @@ int run(int argc, char** argv) {
     try {
       kw::gait::GaitTable table = kw::gait::loadGaitTable(out, proportions);
       kw::gait::GaitTable other = kw::gait::loadGaitTable(merge_table, proportions);
+      takeSwingBounds(table);
+      other.swing_bounds = table.swing_bounds;  // its gaits are checked against them next
       markStaleGaits(table, proportions, options, out);
       markStaleGaits(other, proportions, options, merge_table);
       const int taken = kw::gait::keepLowerEffort(table, other);
@@ -262,6 +289,7 @@ int run(int argc, char** argv) {
       for (auto& entry : table.entries)
         entry.gait.controls = kw::gait::withFixedControls(entry.gait.controls, *table.fixed);
     }
+    takeSwingBounds(table);
     markStaleGaits(table, proportions, options, out);
     if (retry_failed)
       for (auto& e : table.entries)
@@ -272,6 +300,7 @@ int run(int argc, char** argv) {
     table.body = proportions;
     table.entries.resize(table.grid.size());
     if (prior_fixed) table.fixed = kw::gait::FixedControls{};
+    table.swing_bounds = {options.min_passing_clearance, options.max_swing_knee_flexion};
   }
   options.fixed = table.fixed;
   const kw::gait::GaitGrid& grid = table.grid;
@@ -301,6 +330,16 @@ int run(int argc, char** argv) {
     for (int i = 0; i < grid.size(); ++i)
       if (on_grid.entries[i].feasible) seed_gaits[i] = on_grid.entries[i].gait;
   }
+  // With --seed-only, only the seed table's gait nearest the seed point: the table is grown
+  // from that one gait.
+  auto keepOnlyNearestSeedGait = [&] {
+    int nearest = -1;
+    for (int i = 0; i < grid.size(); ++i)
+      if (seed_gaits[i] && (nearest < 0 || gridDistance(grid, i, seed) < gridDistance(grid, nearest, seed))) nearest = i;
+    for (int i = 0; i < grid.size(); ++i)
+      if (i != nearest) seed_gaits[i].reset();
+  };
+  if (seed_only) keepOnlyNearestSeedGait();
   const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
                                         [](const kw::gait::GaitTableEntry& e) { return e.feasible; });
   if (!any_feasible) {
@@ -352,16 +391,35 @@ int run(int argc, char** argv) {
                  tty ? "" : "\n");
   };
 
-  // The next point to solve: unsolved, not in progress, with the most warm starts (feasible
-  // neighbours, and the seed table's gait there) (nearest the seed on ties); -1 if none is ready.
+  // The feasible neighbours of a point, bit k for the k-th of neighbours(). A point that failed
+  // is tried again, from the neighbours that have become feasible since its last try (a point
+  // solved early, from one neighbour, often succeeds from the ones solved after it).
+  auto feasibleNeighbours = [&](int point) {
+    std::uint32_t mask = 0;
+    const std::vector<int> around = neighbours(grid, point);
+    for (size_t k = 0; k < around.size(); ++k)
+      if (table.entries[around[k]].feasible) mask |= std::uint32_t{1} << k;
+    return mask;
+  };
+  std::vector<std::uint32_t> tried_from(grid.size(), 0);  // feasible neighbours at the last try
+  // A failed gait of a resumed table counts as tried from its neighbours as they are
+  // (--retry-failed solves it again from all).
+  for (int i = 0; i < grid.size(); ++i)
+    if (table.entries[i].solved && !table.entries[i].feasible) tried_from[i] = feasibleNeighbours(i);
+
+  // The next point to solve: unsolved, or failed with new feasible neighbours since its last
+  // try, not in progress, with the most (new) warm starts (feasible neighbours, and the seed
+  // table's gait there) (nearest the seed on ties); -1 if none is ready.
   auto nextPoint = [&]() {
     int best = -1, best_count = 0;
     double best_distance = 0;
     for (int i = 0; i < grid.size(); ++i) {
-      if (table.entries[i].solved || in_progress[i]) continue;
-      int count = 0;
-      for (int n : neighbours(grid, i)) count += table.entries[n].feasible;
-      count += seed_gaits[i].has_value();
+      const kw::gait::GaitTableEntry& entry = table.entries[i];
+      if (entry.feasible || in_progress[i]) continue;
+      const std::uint32_t fresh = feasibleNeighbours(i) & ~tried_from[i];
+      int count = __builtin_popcount(fresh);
+      if (entry.solved && count == 0) continue;
+      if (!entry.solved) count += seed_gaits[i].has_value();
       const double distance = gridDistance(grid, i, seed);
       if (count > best_count || (count == best_count && count > 0 && distance < best_distance))
         best = i, best_count = count, best_distance = distance;
@@ -383,14 +441,22 @@ int run(int argc, char** argv) {
       }
       in_progress[point] = true;
       ++running;
+      // Warm starts: the neighbours feasible since the last try first, each group nearest first.
+      const std::uint32_t now = feasibleNeighbours(point), fresh = now & ~tried_from[point];
+      const bool retry = table.entries[point].solved;
+      tried_from[point] = now;
+      const std::vector<int> around = neighbours(grid, point);
       std::vector<int> starts;
-      for (int n : neighbours(grid, point))
-        if (table.entries[n].feasible) starts.push_back(n);
+      for (size_t k = 0; k < around.size(); ++k)
+        if (now >> k & 1) starts.push_back(static_cast<int>(k));
       std::sort(starts.begin(), starts.end(), [&](int a, int b) {
-        return gridDistance(grid, a, point) < gridDistance(grid, b, point);
+        const bool fa = fresh >> a & 1, fb = fresh >> b & 1;
+        if (fa != fb) return fa;
+        return gridDistance(grid, around[a], point) < gridDistance(grid, around[b], point);
       });
+      for (int& k : starts) k = around[k];
       std::vector<kw::gait::Gait> warm;
-      if (seed_gaits[point]) warm.push_back(*seed_gaits[point]);
+      if (seed_gaits[point] && !retry) warm.push_back(*seed_gaits[point]);
       for (int n : starts) warm.push_back(table.entries[n].gait);
       lock.unlock();
 
@@ -411,7 +477,7 @@ int run(int argc, char** argv) {
         if (found) break;
       }
       // Failing that, continue from the nearest neighbour through the midpoint target.
-      const size_t nearest = seed_gaits[point] ? 1 : 0;
+      const size_t nearest = seed_gaits[point] && !retry ? 1 : 0;
       if (!found && warm.size() > nearest) {
         const kw::gait::Gait& neighbour = warm[nearest];
         const kw::gait::GaitTarget& from = neighbour.target;

@@ -101,6 +101,12 @@ void saveGaitTable(const std::string& path, const GaitTable& table) {
          << std::vector<double>{table.fixed->knee_damping, table.fixed->torso_rest_per_slope,
                                 table.fixed->torso_damping};
   }
+  const SwingBounds& bounds = table.swing_bounds;
+  if (std::isfinite(bounds.min_passing_clearance) || std::isfinite(bounds.max_swing_knee_flexion))
+    file.writeComment("Bounds on the swing held while optimising (absent: not bounded): the swing sole's\n"
+                      "lowest height passing the stance foot, leg lengths; the swing knee's peak flexion, rad.");
+  if (std::isfinite(bounds.min_passing_clearance)) file << "min_passing_clearance" << bounds.min_passing_clearance;
+  if (std::isfinite(bounds.max_swing_knee_flexion)) file << "max_swing_knee_flexion" << bounds.max_swing_knee_flexion;
   file << "gaits" << "[";
   for (size_t i = 0; i < table.entries.size(); ++i) {
     const GaitTableEntry& e = table.entries[i];
@@ -141,6 +147,9 @@ GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions
   requireAscending(file, "slopes_rad", g.slopes_rad);
   std::array<double, 3> fixed;
   if (file.read("fixed_controls", fixed)) table.fixed = FixedControls{fixed[0], fixed[1], fixed[2]};
+  for (const auto& [key, bound] : {std::pair{"min_passing_clearance", &table.swing_bounds.min_passing_clearance},
+                                   std::pair{"max_swing_knee_flexion", &table.swing_bounds.max_swing_knee_flexion}})
+    file.read(key, *bound);  // finite: absent means not bounded
 
   std::vector<common::ConfigNode> gaits = file.maps("gaits", common::Need::kRequired);
   if (static_cast<int>(gaits.size()) != g.size())
@@ -211,6 +220,8 @@ int keepLowerEffort(GaitTable& table, const GaitTable& other) {
     throw std::invalid_argument("keepLowerEffort: the gait tables are for different body models");
   if (table.fixed != other.fixed)
     throw std::invalid_argument("keepLowerEffort: the gait tables hold different controls fixed");
+  if (table.swing_bounds != other.swing_bounds)
+    throw std::invalid_argument("keepLowerEffort: the gait tables were optimised with different swing bounds");
   int taken = 0;
   for (size_t i = 0; i < table.entries.size(); ++i) {
     const GaitTableEntry& theirs = other.entries[i];
@@ -245,6 +256,7 @@ GaitTable regridded(const GaitTable& table, const GaitGrid& grid) {
   result.grid = grid;
   result.body = table.body;
   result.fixed = table.fixed;
+  result.swing_bounds = table.swing_bounds;
   result.entries.resize(grid.size());
   for (int i = 0; i < grid.size(); ++i) {
     const auto c = grid.cell(i);

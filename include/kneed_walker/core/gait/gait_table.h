@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -60,10 +61,24 @@ struct GaitTableEntry {
   GaitQuality quality;
 };
 
+// Bounds on the swing that the optimiser held beside eq. 10 (optimizer::GaitOptimizerOptions,
+// issue 13): the swing sole's lowest height while it passes the stance foot, leg lengths, and
+// the swing knee's largest flexion, rad. Infinite: not bounded.
+struct SwingBounds {
+  double min_passing_clearance = -std::numeric_limits<double>::infinity();
+  double max_swing_knee_flexion = std::numeric_limits<double>::infinity();
+  bool operator==(const SwingBounds& other) const {
+    return min_passing_clearance == other.min_passing_clearance &&
+           max_swing_knee_flexion == other.max_swing_knee_flexion;
+  }
+  bool operator!=(const SwingBounds& other) const { return !(*this == other); }
+};
+
 struct GaitTable {
   GaitGrid grid;
   dynamics::BodyProportions body;      // the walker the gaits were optimised for
   std::optional<FixedControls> fixed;  // controls held while optimising (the prior's table)
+  SwingBounds swing_bounds;            // held while optimising
   std::vector<GaitTableEntry> entries;  // grid.size() of them, in grid.index() order
 };
 
@@ -76,7 +91,7 @@ GaitTable loadGaitTable(const std::string& path, const dynamics::BodyProportions
 // Folds `other`'s feasible gaits into `table` where they have the lower effort (eq. 9): the
 // optimiser finds local optima, and of two runs the lower effort is the better optimum.
 // Returns how many grid points were taken from `other`. Throws std::invalid_argument when the
-// tables' grids, body models or fixed controls differ.
+// tables' grids, body models, fixed controls or swing bounds differ.
 int keepLowerEffort(GaitTable& table, const GaitTable& other);
 
 // `table` on another grid (a grid extended to slower speeds, say): each of its entries whose grid
