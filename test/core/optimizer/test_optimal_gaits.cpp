@@ -54,12 +54,35 @@ const gait::GaitTableEntry& entryAt(const gait::GaitTable& table, const gait::Ga
   throw std::invalid_argument("no such grid point");
 }
 
+// The options a table's gaits were optimised with: its fixed controls and swing bounds.
+GaitOptimizerOptions tableOptions(const gait::GaitTable& table) {
+  GaitOptimizerOptions options;
+  options.fixed = table.fixed;
+  options.min_passing_clearance = table.swing_bounds.min_passing_clearance;
+  options.max_swing_knee_flexion = table.swing_bounds.max_swing_knee_flexion;
+  return options;
+}
+
+// The shipped free table's feasible gait at which `measure` of its stride is largest.
+const gait::GaitTableEntry& entryWithLargest(const gait::GaitTable& table,
+                                             double (*measure)(const dynamics::StrideResult&)) {
+  const gait::GaitTableEntry* best = nullptr;
+  double largest = -std::numeric_limits<double>::infinity();
+  for (const auto& e : table.entries) {
+    if (!e.feasible) continue;
+    const double m = measure(simulatedGait(table.body, e.gait, tableOptions(table)).stride);
+    if (m > largest) largest = m, best = &e;
+  }
+  return *best;
+}
+
 // A gait is feasible only if the runtime's simulator walks it: the optimiser's own lets the
 // swing sole pass through the ground, the prior's calls a sole deeper than
 // max_swing_penetration a fall. A shipped gait that dips 0.005 L or more while passing the
 // stance foot is feasible with the default 0.03 L and not with a limit of 0.004 L.
 TEST(OptimalGaits, AGaitTheRuntimeSimulatorCallsAFallIsNotFeasible) {
-  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  // The prior's table: the free one clears the ground (issue 13).
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel());
   const dynamics::WalkerSimulator runtime(dynamics::dimensionlessWalker(table.body));
   const gait::GaitTableEntry* scraping = nullptr;
   for (const auto& e : table.entries)
@@ -79,26 +102,28 @@ TEST(OptimalGaits, AGaitTheRuntimeSimulatorCallsAFallIsNotFeasible) {
   EXPECT_FALSE(strictly.feasible());
 }
 
-// The landing inequality beside eq. 10 is active in the shipped table: uphill (3.5 km/h, 0.5 m
-// steps, +4.3°) the cheapest gait pushes off so hard that its landing would need the ground to
-// pull (the table before the constraint had it landing at -0.027), and the shipped gait lands
-// at the bound, 0.01. From it, the optimiser with the bound removed finds a cheaper gait that
-// lands lower; with the bound raised to 0.012 it lands at least that hard, at more effort.
-// (Larger changes of the bound are not asked: SLSQP with finite differences, started that far
-// from the constraint, stalls. The table tool's continuation handles those.)
+// The landing inequality beside eq. 10 is active in the prior's shipped table: at the gait that
+// lands softest at the bound, 0.01, the cheapest gait would push
+// off so hard that its landing would need less. From it, the optimiser with the bound lowered to 0.008
+// finds a cheaper gait that lands lower; with the bound raised to 0.012 it lands at least that
+// hard, at more effort. (Larger changes of the bound are not asked: SLSQP with finite
+// differences, started that far from the constraint, stalls. The table tool's continuation
+// handles those.)
 TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
-  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
-  const gait::GaitTarget uphill = table.grid.target(3.5, 0.5, 4.3 * M_PI / 180);
-  const gait::GaitTableEntry& shipped = entryAt(table, uphill);
-  ASSERT_TRUE(shipped.feasible);
-  const GaitOptimizerOptions bounded;
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel());
+  const gait::GaitTableEntry& shipped =
+      entryWithLargest(table, [](const dynamics::StrideResult& s) {
+        return s.landing_impulse >= 0.0099 ? -s.landing_impulse : -1.0;  // at the bound, not below it
+      });
+  const gait::GaitTarget uphill = shipped.gait.target;
+  const GaitOptimizerOptions bounded = tableOptions(table);
   const OptimalGait as_shipped = simulatedGait(table.body, shipped.gait, bounded);
   ASSERT_TRUE(as_shipped.feasible()) << "residual " << as_shipped.periodicity_residual;
   EXPECT_NEAR(as_shipped.effort, shipped.quality.effort, 1e-9 * shipped.quality.effort);
   EXPECT_NEAR(as_shipped.stride.landing_impulse, bounded.min_landing_impulse, 1e-4);
 
-  GaitOptimizerOptions unbounded, raised;
-  unbounded.min_landing_impulse = -1e9;
+  GaitOptimizerOptions unbounded = bounded, raised = bounded;
+  unbounded.min_landing_impulse = 0.008;  // lowered; removed, the optimum would land on a pulling ground
   raised.min_landing_impulse = 0.012;
   const OptimalGait lower = optimizeGait(table.body, uphill, shipped.gait, unbounded);
   const OptimalGait harder = optimizeGait(table.body, uphill, shipped.gait, raised);
@@ -114,30 +139,63 @@ TEST(OptimalGaits, HoldsTheLandingImpulseAboveItsBound) {
   EXPECT_TRUE(simulatedGait(table.body, harder, raised).feasible());
 }
 
-// The clearance inequality beside eq. 10 (GaitOptimizerOptions::min_passing_clearance, off by
-// default): the shipped level gait at 4.5 km/h, 0.7 m steps passes the stance foot with its
-// swing sole 0.0011 L below the ground (the soft scuff penalty lets it). It is feasible without
-// the bound and not with one at -0.0005 L, from which the optimiser finds a gait that clears it.
+// The clearance inequality beside eq. 10 (GaitOptimizerOptions::min_passing_clearance; the free
+// table is solved with 0.01 L): at a gait where it is active (the lowest passing clearance of
+// the table, 0.0100 L), the optimiser without the bound finds a cheaper gait that passes lower,
+// and that gait is not feasible with the bound.
 TEST(OptimalGaits, HoldsTheSwingSoleAboveTheClearanceBound) {
   const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
-  const gait::GaitTarget level = table.grid.target(4.5, 0.7, 0);
-  const gait::GaitTableEntry& shipped = entryAt(table, level);
-  ASSERT_TRUE(shipped.feasible);
-  const OptimalGait as_shipped = simulatedGait(table.body, shipped.gait);
+  const GaitOptimizerOptions bounded = tableOptions(table);
+  ASSERT_EQ(bounded.min_passing_clearance, 0.01);
+  const gait::GaitTableEntry& at_bound =
+      entryWithLargest(table, [](const dynamics::StrideResult& s) { return -s.integrals.passing_clearance; });
+  const OptimalGait as_shipped = simulatedGait(table.body, at_bound.gait, bounded);
   ASSERT_TRUE(as_shipped.feasible());
-  EXPECT_LT(as_shipped.stride.integrals.passing_clearance, -0.001);
-  GaitOptimizerOptions bounded;
-  bounded.min_passing_clearance = -0.0005;
-  const OptimalGait scraping = simulatedGait(table.body, shipped.gait, bounded);
-  EXPECT_FALSE(scraping.clears_the_ground);
-  EXPECT_FALSE(scraping.feasible());
-  const OptimalGait lifted = optimizeGait(table.body, level, shipped.gait, bounded);
+  EXPECT_NEAR(as_shipped.stride.integrals.passing_clearance, 0.01, 1e-5);
+  GaitOptimizerOptions unbounded = bounded;
+  unbounded.min_passing_clearance = -std::numeric_limits<double>::infinity();
+  const OptimalGait lower = optimizeGait(table.body, at_bound.gait.target, at_bound.gait, unbounded);
   std::cout << "passing clearance (effort): shipped " << as_shipped.stride.integrals.passing_clearance << " ("
-            << as_shipped.effort << "), bound -0.0005: " << lifted.stride.integrals.passing_clearance << " ("
-            << lifted.effort << ")\n";
-  ASSERT_TRUE(lifted.feasible()) << "residual " << lifted.periodicity_residual;
-  EXPECT_GE(lifted.stride.integrals.passing_clearance, bounded.min_passing_clearance - 1e-6);
-  EXPECT_TRUE(simulatedGait(table.body, lifted, bounded).feasible());
+            << as_shipped.effort << "), without the bound " << lower.stride.integrals.passing_clearance << " ("
+            << lower.effort << ")\n";
+  ASSERT_TRUE(lower.feasible()) << "residual " << lower.periodicity_residual;
+  EXPECT_LT(lower.effort, as_shipped.effort);
+  EXPECT_LT(lower.stride.integrals.passing_clearance, 0.01 - 1e-4);
+  const OptimalGait checked = simulatedGait(table.body, lower, bounded);
+  EXPECT_FALSE(checked.clears_the_ground);
+  EXPECT_FALSE(checked.feasible());
+}
+
+// The knee inequality beside eq. 10 (GaitOptimizerOptions::max_swing_knee_flexion; the free
+// table is solved with 1.31 rad): at the gait whose swing knee flexes most (at the bound), the
+// optimiser without the bound finds a cheaper gait that flexes further, and that gait is not
+// feasible with the bound.
+TEST(OptimalGaits, HoldsTheSwingKneeUnderItsFlexionBound) {
+  const gait::GaitTable table = gait::loadGaitTable(test::configFile("gait_table.yaml"), test::shippedWalkerModel());
+  const GaitOptimizerOptions bounded = tableOptions(table);
+  ASSERT_EQ(bounded.max_swing_knee_flexion, 1.31);
+  const gait::GaitTableEntry& at_bound =
+      entryWithLargest(table, [](const dynamics::StrideResult& s) { return s.integrals.max_swing_knee_flexion; });
+  const OptimalGait as_shipped = simulatedGait(table.body, at_bound.gait, bounded);
+  ASSERT_TRUE(as_shipped.feasible());
+  EXPECT_NEAR(as_shipped.stride.integrals.max_swing_knee_flexion, 1.31, 1e-5);
+  GaitOptimizerOptions unbounded = bounded;
+  unbounded.max_swing_knee_flexion = std::numeric_limits<double>::infinity();
+  const OptimalGait folded = optimizeGait(table.body, at_bound.gait.target, at_bound.gait, unbounded);
+  std::cout << "swing knee peak (effort): shipped " << as_shipped.stride.integrals.max_swing_knee_flexion << " rad ("
+            << as_shipped.effort << "), without the bound " << folded.stride.integrals.max_swing_knee_flexion
+            << " rad (" << folded.effort << ")\n";
+  // Periodic and on target; SLSQP ends this solve with the clearance bound not quite met, so
+  // feasible() is not asked of it.
+  ASSERT_TRUE(folded.stride.completed && folded.walks_at_runtime);
+  EXPECT_LT(folded.periodicity_residual, 1e-6);
+  EXPECT_LT(folded.speed_error, 0.01);
+  EXPECT_LT(folded.step_length_error, 0.01);
+  EXPECT_LT(folded.effort, as_shipped.effort);
+  EXPECT_GT(folded.stride.integrals.max_swing_knee_flexion, 1.31 + 1e-4);
+  const OptimalGait checked = simulatedGait(table.body, folded, bounded);
+  EXPECT_FALSE(checked.knee_within_bound);
+  EXPECT_FALSE(checked.feasible());
 }
 
 // A solve whose stride diverged (NaN speed and step length, unbounded effort) is recorded so
