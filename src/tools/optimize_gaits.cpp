@@ -6,6 +6,7 @@
 //                                      [--prior-fixed] [--seed-table config/gait_table.yaml [--seed-only]]
 //                                      [--min-passing-clearance L] [--max-swing-knee-flexion rad]
 //                                      [--speeds 1.5,2,...,7] [--step-lengths 0.5,...,1] [--slopes -0.075,...,0.075]
+//                                      [--polish [--polish-sweeps 20]]
 //   rosrun kneed_walker optimize_gaits --out config/gait_table.yaml --merge other_run.yaml
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
 // config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
@@ -16,7 +17,8 @@
 // the point first), and where those fail, by continuation from the nearest neighbour through
 // the midpoint. A point that failed is tried again whenever neighbours have become feasible
 // since its last try. The table is rewritten after every gait, so an interrupted run continues
-// with --resume.
+// with --resume. With --polish, every feasible gait is then solved again from its neighbours'
+// gaits, sweep after sweep, and the lowest effort kept (optimizer::polishTable).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -35,6 +37,7 @@
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/optimizer/optimal_gaits.h"
+#include "kneed_walker/core/optimizer/table_polish.h"
 #include "options.h"
 #include "tool_main.h"
 #include "package_files.h"
@@ -157,7 +160,14 @@ int run(int argc, char** argv) {
                  "warm-start the seed point from this table's gait there instead of by continuation "
                  "from McGeer's passive gait, and try its gait at every point first (for --prior-fixed: "
                  "the free table's gaits reach points that no solved neighbour does)")->check(CLI::ExistingFile);
-  bool seed_only = false;
+  bool seed_only = false, polish = false;
+  int polish_sweeps = 20;
+  CLI::Option* polish_flag = app.add_flag("--polish", polish,
+               "after solving, lower the effort of the table's gaits: each feasible gait solved again from its "
+               "feasible neighbours' gaits (one step along an axis), the lowest effort kept, sweep after sweep "
+               "until none improves (the first neighbour that leads to a gait is not always the best start)");
+  app.add_option("--polish-sweeps", polish_sweeps, "with --polish: at most this many sweeps")
+      ->check(CLI::Range(1, 100))->capture_default_str()->needs(polish_flag);
   app.add_flag("--seed-only", seed_only,
                "with --seed-table: take only its gait nearest the seed point, and build every other point from "
                "the solved ones (the table grown from one gait)");
@@ -516,6 +526,29 @@ int run(int argc, char** argv) {
   // Written here too: a resume that solved no point may still have re-marked stale gaits or
   // regridded the table, and the workers only write after solving one.
   writeAtomically(out, table);
+  if (polish) {
+    const double polish_start = elapsed();
+    int last_sweep = 0;
+    double effort_before = 0;
+    for (const auto& e : table.entries)
+      if (e.feasible) effort_before += e.quality.effort;
+    const kw::optimizer::PolishReport report = kw::optimizer::polishTable(
+        table, options, threads, polish_sweeps, 1e-3, [&](const kw::optimizer::PolishProgress& p) {
+          if (p.sweep != last_sweep && last_sweep > 0 && tty) std::fprintf(stderr, "\n");
+          last_sweep = p.sweep;
+          const int width = 30, filled = width * p.done / std::max(1, p.points);
+          std::fprintf(stderr, "%spolish sweep %d [%s%s] %d/%d gaits, %d improved | %s elapsed%s", tty ? "\r" : "",
+                       p.sweep, std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), p.done,
+                       p.points, p.improved, clock(elapsed() - polish_start).c_str(), tty ? "" : "\n");
+        });
+    writeAtomically(out, table);
+    double effort_after = 0;
+    for (const auto& e : table.entries)
+      if (e.feasible) effort_after += e.quality.effort;
+    std::fprintf(stderr, "%soptimize_gaits: polished in %d sweeps (%d solves, %s): %d gaits of lower effort, "
+                 "summed effort %.4g -> %.4g\n", tty ? "\n" : "", report.sweeps, report.solves,
+                 clock(elapsed() - polish_start).c_str(), report.improved_points, effort_before, effort_after);
+  }
   int feasible = 0, unreached = 0;
   for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;
   std::fprintf(stderr, "%soptimize_gaits: %d of %d gaits feasible, %d unreached, in %s on %d threads; wrote %s\n",
