@@ -9,7 +9,7 @@
 namespace kneed_walker::core::optimizer {
 namespace {
 
-// Two level gaits of the free table shipped on 2026-12-04 (4 and 4.5 km/h, 0.7 m steps); the
+// Two level gaits of the free table shipped before its polish (c9015b0; 4 and 4.5 km/h, 0.7 m steps); the
 // 4.5 km/h one is a poor local optimum (effort 0.282).
 gait::GaitTable unpolishedGaits() {
   return gait::loadGaitTable(std::string(KNEED_WALKER_SOURCE_DIR) + "/test/core/optimizer/data/unpolished_level_gaits.yaml",

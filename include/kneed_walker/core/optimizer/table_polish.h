@@ -3,7 +3,7 @@
 // optimize_gaits solves each grid point from the first of its neighbours' gaits that leads to
 // a feasible one, and SLSQP finds the local optimum nearest that start: a point reached early
 // from a far branch keeps a gait whose effort a neighbour's warm start beats by up to a hundred
-// times (the level 4.5 km/h 0.7 m gait of the table shipped on 2026-12-04: 0.282 against 0.048
+// times (the level 4.5 km/h 0.7 m gait of the table shipped before its polish, c9015b0: 0.282 against 0.048
 // from the 4 km/h neighbour's). polishTable re-solves every feasible gait from its neighbours'
 // gaits and keeps the lowest effort, sweep after sweep, until no gait improves.
 #pragma once
