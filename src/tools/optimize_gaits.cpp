@@ -153,7 +153,7 @@ int run(int argc, char** argv) {
                "hold the prior's fixed controls (knee and torso damping, torso rest angle; paper 3.4) "
                "instead of optimising them: the prior's table");
   std::string seed_table, merge_table;
-  app.add_option("--merge", merge_table,
+  CLI::Option* merge_option = app.add_option("--merge", merge_table,
                  "fold this table's gaits into --out where they have the lower effort, then exit "
                  "(the optimiser finds local optima: keep the better of two runs)")->check(CLI::ExistingFile);
   app.add_option("--seed-table", seed_table,
@@ -165,7 +165,8 @@ int run(int argc, char** argv) {
   CLI::Option* polish_flag = app.add_flag("--polish", polish,
                "after solving, lower the effort of the table's gaits: each feasible gait solved again from its "
                "feasible neighbours' gaits (one step along an axis), the lowest effort kept, sweep after sweep "
-               "until none improves (the first neighbour that leads to a gait is not always the best start)");
+               "until none improves (the first neighbour that leads to a gait is not always the best start)")
+      ->excludes(merge_option);
   app.add_option("--polish-sweeps", polish_sweeps, "with --polish: at most this many sweeps")
       ->check(CLI::Range(1, 100))->capture_default_str()->needs(polish_flag);
   app.add_flag("--seed-only", seed_only,
@@ -528,26 +529,29 @@ int run(int argc, char** argv) {
   writeAtomically(out, table);
   if (polish) {
     const double polish_start = elapsed();
+    auto summedEffort = [&] {
+      double sum = 0;
+      for (const auto& e : table.entries)
+        if (e.feasible) sum += e.quality.effort;
+      return sum;
+    };
+    const double effort_before = summedEffort();
     int last_sweep = 0;
-    double effort_before = 0;
-    for (const auto& e : table.entries)
-      if (e.feasible) effort_before += e.quality.effort;
+    // Written after every sweep: an interrupted polish keeps the sweeps it finished.
     const kw::optimizer::PolishReport report = kw::optimizer::polishTable(
-        table, options, threads, polish_sweeps, 1e-3, [&](const kw::optimizer::PolishProgress& p) {
+        table, options, threads, polish_sweeps, 1e-3,
+        [&](const kw::optimizer::PolishProgress& p) {
           if (p.sweep != last_sweep && last_sweep > 0 && tty) std::fprintf(stderr, "\n");
           last_sweep = p.sweep;
           const int width = 30, filled = width * p.done / std::max(1, p.points);
           std::fprintf(stderr, "%spolish sweep %d [%s%s] %d/%d gaits, %d improved | %s elapsed%s", tty ? "\r" : "",
                        p.sweep, std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), p.done,
                        p.points, p.improved, clock(elapsed() - polish_start).c_str(), tty ? "" : "\n");
-        });
-    writeAtomically(out, table);
-    double effort_after = 0;
-    for (const auto& e : table.entries)
-      if (e.feasible) effort_after += e.quality.effort;
+        },
+        [&](const kw::gait::GaitTable& polished) { writeAtomically(out, polished); });
     std::fprintf(stderr, "%soptimize_gaits: polished in %d sweeps (%d solves, %s): %d gaits of lower effort, "
                  "summed effort %.4g -> %.4g\n", tty ? "\n" : "", report.sweeps, report.solves,
-                 clock(elapsed() - polish_start).c_str(), report.improved_points, effort_before, effort_after);
+                 clock(elapsed() - polish_start).c_str(), report.improved_points, effort_before, summedEffort());
   }
   int feasible = 0, unreached = 0;
   for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;

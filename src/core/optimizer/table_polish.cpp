@@ -2,6 +2,8 @@
 
 #include <array>
 #include <mutex>
+#include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "kneed_walker/core/common/parallel.h"
@@ -28,7 +30,12 @@ std::vector<int> faceNeighbours(const gait::GaitGrid& grid, int index) {
 }  // namespace
 
 PolishReport polishTable(gait::GaitTable& table, const GaitOptimizerOptions& given, int threads, int max_sweeps,
-                         double min_improvement, const std::function<void(const PolishProgress&)>& progress) {
+                         double min_improvement, const std::function<void(const PolishProgress&)>& progress,
+                         const std::function<void(const gait::GaitTable&)>& after_sweep) {
+  if (threads < 0) throw std::invalid_argument("polishTable: threads must be >= 0 (0: all cores)");
+  if (max_sweeps < 1) throw std::invalid_argument("polishTable: max_sweeps must be >= 1");
+  if (!(min_improvement >= 0 && min_improvement < 1))
+    throw std::invalid_argument("polishTable: min_improvement must lie in [0, 1)");
   GaitOptimizerOptions options = given;
   options.fixed = table.fixed;
   options.min_passing_clearance = table.swing_bounds.min_passing_clearance;
@@ -81,17 +88,17 @@ PolishReport polishTable(gait::GaitTable& table, const GaitOptimizerOptions& giv
       }
     }, 1);
     std::fill(replaced.begin(), replaced.end(), false);
-    int replacements = 0;
+    bool any_replaced = false;
     for (size_t k = 0; k < points.size(); ++k) {
       report.solves += solves[k];
       if (!better[k]) continue;
       table.entries[points[k]] = tableEntry(*better[k]);
       replaced[points[k]] = true;
       ever_improved[points[k]] = true;
-      ++replacements;
+      any_replaced = true;
     }
-    report.replacements += replacements;
-    if (replacements == 0) break;
+    if (after_sweep) after_sweep(table);
+    if (!any_replaced) break;
   }
   for (bool improved : ever_improved) report.improved_points += improved;
   return report;

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
+#include <tuple>
 
 namespace kneed_walker::core::optimizer {
 namespace {
@@ -30,7 +32,10 @@ int indexOf(const gait::GaitGrid& grid, double speed_kmh) {
 TEST(TablePolish, LowersTheEffortOfAPoorLocalOptimum) {
   const gait::GaitTable before = unpolishedGaits();
   gait::GaitTable table = before;
-  const PolishReport report = polishTable(table, GaitOptimizerOptions{}, 1);
+  int sweeps_seen = 0;
+  const PolishReport report = polishTable(table, GaitOptimizerOptions{}, 1, 20, 1e-3, {},
+                                          [&](const gait::GaitTable&) { ++sweeps_seen; });
+  EXPECT_EQ(sweeps_seen, report.sweeps);
   const int fast = indexOf(table.grid, 4.5), slow = indexOf(table.grid, 4.0);
   ASSERT_TRUE(table.entries[fast].feasible);
   EXPECT_LT(table.entries[fast].quality.effort, 0.5 * before.entries[fast].quality.effort);
@@ -81,6 +86,22 @@ TEST(TablePolish, SolvesWithTheTablesOwnBounds) {
     const OptimalGait again = simulatedGait(table.body, entry.gait, lower);
     EXPECT_GE(again.stride.integrals.passing_clearance, 0.0106 - 1e-6) << "point " << i;
     EXPECT_LE(again.stride.integrals.max_swing_knee_flexion, table.swing_bounds.max_swing_knee_flexion + 1e-6);
+  }
+}
+
+// Settings that mean nothing are refused, naming the setting.
+TEST(TablePolish, RefusesMeaninglessSettings) {
+  gait::GaitTable table = unpolishedGaits();
+  for (const auto& [threads, sweeps, improvement, name] :
+       {std::tuple{-1, 20, 1e-3, "threads"}, std::tuple{1, 0, 1e-3, "max_sweeps"},
+        std::tuple{1, 20, std::nan(""), "min_improvement"}, std::tuple{1, 20, 1.0, "min_improvement"},
+        std::tuple{1, 20, -0.1, "min_improvement"}}) {
+    try {
+      polishTable(table, GaitOptimizerOptions{}, threads, sweeps, improvement);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -25,7 +25,6 @@ struct PolishProgress {
 struct PolishReport {
   int sweeps = 0;            // sweeps run (the last improved nothing, unless max_sweeps stopped it)
   int improved_points = 0;   // grid points whose gait was replaced at least once
-  int replacements = 0;      // gaits replaced, over all sweeps
   int solves = 0;            // optimizeGait calls
 };
 
@@ -39,9 +38,12 @@ struct PolishReport {
 // the outcome is the same on any number of threads. The gaits are solved for the table's body,
 // with its fixed controls and swing bounds; the rest of `options` (the effort's weights, the
 // solver's settings) as given. `progress`, if given, is called after each point, from one
-// thread at a time.
+// thread at a time; `after_sweep`, if given, after each sweep with the table as it then is (a
+// long run can save it). Throws std::invalid_argument for threads < 0, max_sweeps < 1 or
+// min_improvement outside [0, 1).
 PolishReport polishTable(gait::GaitTable& table, const GaitOptimizerOptions& options, int threads,
                          int max_sweeps = 20, double min_improvement = 1e-3,
-                         const std::function<void(const PolishProgress&)>& progress = {});
+                         const std::function<void(const PolishProgress&)>& progress = {},
+                         const std::function<void(const gait::GaitTable&)>& after_sweep = {});
 
 }  // namespace kneed_walker::core::optimizer
