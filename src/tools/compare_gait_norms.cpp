@@ -71,26 +71,24 @@ int main(int argc, char** argv) {
     const kw::dynamics::WalkerSimulator sim(kw::dynamics::dimensionlessWalker(table.body));
     if (gait.start.stance_leg != kw::dynamics::Leg::kLeft) throw std::runtime_error("expected a left stance start");
 
-    // Two steps from the left heel strike, sampled at the norms' cycle points. Each sample is
-    // one advance from its step's start, so that the steps are the stride function's, the
-    // optimiser's own: advanced in pieces, a gait whose free knee touches its limit between two
-    // step ends can take another path (the simulator sees the touch only at a step end).
-    std::array<kw::dynamics::WalkerState, 2> step_start{gait.start, gait.start};
-    std::array<double, 2> step_duration{};
+    // Two steps from the left heel strike (their durations by the stride function), sampled at
+    // the norms' cycle points by walking on from sample to sample.
+    double cycle_time = 0;
+    kw::dynamics::WalkerState s = gait.start;
     for (int step = 0; step < 2; ++step) {
-      const kw::dynamics::StrideResult stride = sim.stride(gait.controls, step_start[step]);
+      const kw::dynamics::StrideResult stride = sim.stride(gait.controls, s);
       if (!stride.completed) throw std::runtime_error("the gait falls within a cycle");
-      step_duration[step] = stride.duration;
-      if (step == 0) step_start[1] = stride.end;
+      cycle_time += stride.duration;
+      s = stride.end;
     }
-    const double cycle_time = step_duration[0] + step_duration[1];
     const kw::gait::NormCurve& reference = norms.curve(kJoints[0]);
     std::vector<std::array<double, 3>> model(reference.cycle.size());
+    s = gait.start;
+    double walked = 0;
     for (size_t i = 0; i < reference.cycle.size(); ++i) {
       const double at = reference.cycle[i] * cycle_time;
-      const int step = at < step_duration[0] ? 0 : 1;
-      kw::dynamics::WalkerState s = step_start[step];
-      sim.advance(gait.controls, s, std::min(at - step * step_duration[0], step_duration[step]));
+      sim.advance(gait.controls, s, at - walked);
+      walked = at;
       model[i] = leftLegAngles(s, 0.0);
     }
 

@@ -34,17 +34,26 @@ void illinois(Function g, double& lo, double& hi, double g_lo, double g_hi, doub
   }
 }
 
+// The cubic Hermite interpolant of q through a step's ends (q and q̇ at both, h apart) at the
+// step fraction s ∈ [0, 1], and its time derivative.
+Vector5 hermitePosition(const Vector5& q0, const Vector5& qdot0, const Vector5& q1, const Vector5& qdot1,
+                        double h, double s) {
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * q0 + ((s3 - 2 * s2 + s) * h) * qdot0 + (-2 * s3 + 3 * s2) * q1 +
+         ((s3 - s2) * h) * qdot1;
+}
+Vector5 hermiteRate(const Vector5& q0, const Vector5& qdot0, const Vector5& q1, const Vector5& qdot1,
+                    double h, double s) {
+  const double s2 = s * s;
+  return ((6 * s2 - 6 * s) / h) * (q0 - q1) + (3 * s2 - 4 * s + 1) * qdot0 + (3 * s2 - 2 * s) * qdot1;
+}
+
 // The step fraction in [0, 1] where g(q) crosses zero on the cubic Hermite interpolant of q
-// through the step's ends (q and q̇ at both): no integration needed.
+// through the step's ends: no integration needed.
 template <typename EventFunction>
 double interpolatedEventFraction(EventFunction g, const WalkerState& a, const WalkerState& b,
                                  double h) {
-  auto at = [&](double s) {
-    const double s2 = s * s, s3 = s2 * s;
-    const Vector5 q = (2 * s3 - 3 * s2 + 1) * a.q + ((s3 - 2 * s2 + s) * h) * a.qdot +
-                      (-2 * s3 + 3 * s2) * b.q + ((s3 - s2) * h) * b.qdot;
-    return g(q);
-  };
+  auto at = [&](double s) { return g(hermitePosition(a.q, a.qdot, b.q, b.qdot, h, s)); };
   double lo = 0, hi = 1;
   const double g_lo = at(0), g_hi = at(1);
   if (!(g_lo > 0 && g_hi <= 0)) return 0.5;
@@ -174,6 +183,28 @@ AdvanceReport WalkerSimulator::advance(const WalkerControls& controls, WalkerSta
   return run(controls, state, duration, false, integrals);
 }
 
+void WalkerSimulator::interpolateStep(WalkerState& state, double done) {
+  StepInProgress& step = state.step;
+  step.done = done;
+  const double h = step.duration, s = done / h;
+  state.q = hermitePosition(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
+  state.qdot = hermiteRate(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
+  // Between ends that keep a knee within its limit, the interpolant may pass it by a few µrad
+  // (a free knee grazing the limit): the knee is shown on its limit there.
+  if (kneeFlexion(state.q, 0) < 0) state.q[kStanceShank] = state.q[kStanceThigh];
+  if (kneeFlexion(state.q, 1) < 0) state.q[kSwingShank] = state.q[kSwingThigh];
+  state.time_in_stride = step.start_time_in_stride + done;
+}
+
+bool WalkerSimulator::isIntegratorState(const WalkerState& state) {
+  const StepInProgress& step = state.step;
+  if (!step.valid) return false;
+  if (step.duration == 0) return state.q == step.end_q && state.qdot == step.end_qdot;
+  WalkerState expected = state;
+  interpolateStep(expected, step.done);
+  return state.q == expected.q && state.qdot == expected.qdot;
+}
+
 AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& state,
                                    double duration, bool stop_at_heel_strike,
                                    TorqueIntegrals* integrals) const {
@@ -181,13 +212,6 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
   if (state.fallen) {
     report.fell = true;
     return report;
-  }
-  // A state from outside (a perturbed particle, a hand-made guess) may sit beyond a knee limit
-  // or move into it while flagged as on it: put it on the limit first (eq. 6 + projection).
-  for (int k = 0; k < kNumKnees; ++k) {
-    const bool beyond = kneeFlexion(state.q, k) < 0;
-    const bool into = state.knee_on_limit[k] && kneeFlexionRow(k).dot(state.qdot) < 0;
-    if (beyond || into) applyKneeLimit(state, k);
   }
   const double max_step = options_.max_step * natural_time_;
   const double tolerance = options_.event_time_tolerance * natural_time_;
@@ -214,10 +238,105 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
     return below > 0 ? below * below : 0.0;
   };
 
-  Geometry at_state = geometry(state.q);
+  // The event at the state (reached by a step); true if the walker fell at it.
+  auto applyEvent = [&](Event event) {
+    if (event == Event::kHeelStrike) {
+      HeelStrike impact;
+      const WalkerState after = afterHeelStrike(map_, state, controls.toe_off_impulse, &impact);
+      report.last_landing_impulse = impact.ground_normal_impulse;
+      if (!impact.physical()) {
+        ++report.pulling_heel_strikes;
+        if (options_.fall_at_pulling_landing) {
+          state.fallen = true;
+          report.fell = true;
+          return true;
+        }
+      }
+      state = after;
+      ++report.heel_strikes;
+    } else {
+      applyKneeLimit(state, event == Event::kStanceKnee ? 0 : 1);
+      ++report.knee_limit_events;
+    }
+    return false;
+  };
+  // After a step or an event, at a grid point: knees leaving their limits, falls, the stop at a
+  // heel strike. True if run() is to return.
+  Geometry at_state;
+  auto settle = [&](const Geometry& at) {
+    at_state = at;
+    // A knee held on its limit leaves it when the motion flexes it again.
+    for (int k = 0; k < kNumKnees; ++k)
+      if (state.knee_on_limit[k] && kneeFlexion(state.q, k) > 1e-12) state.knee_on_limit[k] = false;
+    if (hasFallen(state, at_state) ||
+        report.heel_strikes + report.knee_limit_events > options_.max_events_per_advance) {
+      state.fallen = true;
+      report.fell = true;
+      return true;
+    }
+    return stop_at_heel_strike && report.heel_strikes > 0;
+  };
+  // The state at a grid point, as the integrator leaves it.
+  auto onGrid = [&]() {
+    state.step = StepInProgress{};
+    state.step.end_q = state.q;
+    state.step.end_qdot = state.qdot;
+    state.step.valid = true;
+    return report;
+  };
+  // The step from the state to `end` (h model time; up to `event`, if any) taken whole; the
+  // state is put `done` into it.
+  auto keepStep = [&](const WalkerState& end, double h, Event event, double done) {
+    StepInProgress step;
+    step.start_q = state.q;
+    step.start_qdot = state.qdot;
+    step.end_q = end.q;
+    step.end_qdot = end.qdot;
+    step.start_time_in_stride = state.time_in_stride;
+    step.duration = h;
+    step.event_at_end = static_cast<std::uint8_t>(event);
+    step.valid = true;
+    state.step = step;
+    interpolateStep(state, done);
+    report.elapsed = duration;
+    return report;
+  };
+
+  if (!isIntegratorState(state)) {
+    state.step = StepInProgress{};
+    // A state from outside (a perturbed particle, a hand-made guess) may sit beyond a knee
+    // limit or move into it while flagged as on it: put it on the limit first (eq. 6 +
+    // projection).
+    for (int k = 0; k < kNumKnees; ++k) {
+      const bool beyond = kneeFlexion(state.q, k) < 0;
+      const bool into = state.knee_on_limit[k] && kneeFlexionRow(k).dot(state.qdot) < 0;
+      if (beyond || into) applyKneeLimit(state, k);
+    }
+    at_state = geometry(state.q);
+  } else if (state.step.duration > 0) {
+    // Inside a step taken before: move within it, or go on from its end.
+    const StepInProgress step = state.step;
+    const double left = step.duration - step.done;
+    if (duration < left) {
+      interpolateStep(state, step.done + duration);
+      report.elapsed = duration;
+      return report;
+    }
+    state.q = step.end_q;
+    state.qdot = step.end_qdot;
+    state.time_in_stride = step.start_time_in_stride + step.duration;
+    state.step = StepInProgress{};
+    report.elapsed = left;
+    const Event event = static_cast<Event>(step.event_at_end);
+    if (event != Event::kNone && applyEvent(event)) return report;
+    if (settle(geometry(state.q))) return state.fallen ? report : onGrid();
+  } else {
+    at_state = geometry(state.q);
+  }
+
   WalkerState trial;
-  while (report.elapsed < duration) {
-    const double h = std::min(max_step, duration - report.elapsed);
+  while (duration - report.elapsed > tolerance) {  // a rounding sliver left over is no step
+    const double h = max_step;  // whole steps: the grid does not depend on `duration`
     TorqueIntegrals step_integrals;
     rk4(controls, state, h, trial, integrals ? &step_integrals : nullptr);
     const Geometry at_trial = geometry(trial.q);
@@ -238,9 +357,19 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
           integrals->passing_clearance = std::min(integrals->passing_clearance, at_trial.swing_clearance);
         integrals->max_swing_knee_flexion = std::max(integrals->max_swing_knee_flexion, kneeFlexion(trial.q, 1));
       }
+      if (report.elapsed + h > duration) {  // the step ends after the time asked
+        if (hasFallen(trial, at_trial)) {     // a fall is a fall as soon as it is seen
+          state = trial;
+          state.fallen = true;
+          report.fell = true;
+          report.elapsed = duration;
+          return report;
+        }
+        return keepStep(trial, h, Event::kNone, duration - report.elapsed);
+      }
       state = trial;
-      at_state = at_trial;
       report.elapsed += h;
+      if (settle(at_trial)) return state.fallen ? report : onGrid();
     } else {
       // Localise the earliest event by the Illinois method on the step fraction.
       Event first = Event::kNone;
@@ -286,42 +415,18 @@ AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& 
         }
       }
       const double h_event = first_fraction * h;
+      if (report.elapsed + h_event > duration) {  // the event comes after the time asked
+        WalkerState at_event;
+        rk4(controls, state, h_event, at_event, integrals);
+        return keepStep(at_event, h_event, first, duration - report.elapsed);
+      }
       rk4(controls, state, h_event, state, integrals);
       report.elapsed += h_event;
-      if (first == Event::kHeelStrike) {
-        HeelStrike impact;
-        const WalkerState after = afterHeelStrike(map_, state, controls.toe_off_impulse, &impact);
-        report.last_landing_impulse = impact.ground_normal_impulse;
-        if (!impact.physical()) {
-          ++report.pulling_heel_strikes;
-          if (options_.fall_at_pulling_landing) {
-            state.fallen = true;
-            report.fell = true;
-            return report;
-          }
-        }
-        state = after;
-        ++report.heel_strikes;
-      } else {
-        applyKneeLimit(state, first == Event::kStanceKnee ? 0 : 1);
-        ++report.knee_limit_events;
-      }
-      at_state = geometry(state.q);
+      if (applyEvent(first)) return report;
+      if (settle(geometry(state.q))) return state.fallen ? report : onGrid();
     }
-
-    // A knee held on its limit leaves it when the motion flexes it again.
-    for (int k = 0; k < kNumKnees; ++k)
-      if (state.knee_on_limit[k] && kneeFlexion(state.q, k) > 1e-12) state.knee_on_limit[k] = false;
-
-    if (hasFallen(state, at_state) ||
-        report.heel_strikes + report.knee_limit_events > options_.max_events_per_advance) {
-      state.fallen = true;
-      report.fell = true;
-      return report;
-    }
-    if (stop_at_heel_strike && report.heel_strikes > 0) return report;
   }
-  return report;
+  return onGrid();
 }
 
 StrideResult WalkerSimulator::stride(const WalkerControls& controls,
@@ -329,6 +434,7 @@ StrideResult WalkerSimulator::stride(const WalkerControls& controls,
   StrideResult result;
   result.end = start;
   result.end.time_in_stride = 0;
+  result.end.step = StepInProgress{};  // a stride starts at a grid point
   const double hip_start = pointPosition(map_.hip, result.end).real();
   const double limit = options_.max_stride_duration * natural_time_;
   const AdvanceReport report = run(controls, result.end, limit * 1.01, true, &result.integrals);

@@ -16,6 +16,18 @@ namespace kneed_walker::core::dynamics {
 enum class Leg : std::uint8_t { kLeft = 0, kRight = 1 };
 inline Leg otherLeg(Leg leg) { return leg == Leg::kLeft ? Leg::kRight : Leg::kLeft; }
 
+// The integrator's RK4 step that a state lies inside (see WalkerSimulator::advance): its two
+// ends, which are the integrator's own states, and how far into it the state is.
+struct StepInProgress {
+  Vector5 start_q = Vector5::Zero(), start_qdot = Vector5::Zero();  // at the step's start
+  Vector5 end_q = Vector5::Zero(), end_qdot = Vector5::Zero();      // at its end: the next grid point, or an event
+  double start_time_in_stride = 0;  // model time
+  double duration = 0;              // model time from start to end; 0: the state is the end itself
+  double done = 0;                  // model time from the start to the state, in [0, duration)
+  std::uint8_t event_at_end = 0;    // the event that the end reaches (applied when the state gets there); 0: none
+  bool valid = false;               // false: the state is not the integrator's (made or changed outside it)
+};
+
 // The dynamics state x = (q, q̇) of one walker plus what the events need.
 struct WalkerState {
   Vector5 q = Vector5::Zero();     // rad: torso, stance thigh, stance shank, swing thigh, swing shank
@@ -26,6 +38,7 @@ struct WalkerState {
   double time_in_stride = 0;       // since the last heel strike, model time
   std::uint32_t heel_strikes = 0;  // since the state was made
   bool fallen = false;             // fell (or diverged): the state is frozen
+  StepInProgress step;             // the integrator's, so that a split advance() continues it
 };
 
 // The heel-strike transition: the impact of eq. 5 (heelStrike, returned in `impact` if given),
@@ -114,6 +127,16 @@ class WalkerSimulator {
 
   // Advances the state by `duration` model time; any number of heel strikes and knee-limit
   // events are handled inside. Torque integrals are added to `integrals` if given.
+  //
+  // The RK4 steps lie on a grid that starts at the last event (heel strike or knee limit):
+  // whole steps of max_step, however the time is split into advance() calls, so that a stride
+  // advanced frame by frame is the same, bit for bit, as the stride advanced at once (a gait
+  // that repeats under stride() repeats in the tracker's frames). An advance() that ends inside
+  // a step takes the whole step (or the part up to an event, which is then applied when the
+  // state gets there) and keeps it in state.step; q and q̇ are then the step's cubic Hermite
+  // interpolant at the time asked (O(h⁴)), and the next advance() goes on from the step's end.
+  // Its torque integrals hold whole steps. A state whose q or q̇ was changed since is taken
+  // as new: its knees are first put on their limits if beyond or moving into them.
   AdvanceReport advance(const WalkerControls& controls, WalkerState& state, double duration,
                         TorqueIntegrals* integrals = nullptr) const;
 
@@ -136,6 +159,11 @@ class WalkerSimulator {
   AdvanceReport run(const WalkerControls& controls, WalkerState& state, double duration,
                     bool stop_at_heel_strike, TorqueIntegrals* integrals) const;
   void applyKneeLimit(WalkerState& state, int knee) const;
+  // Puts a state inside its step at `done` model time from the step's start (the Hermite
+  // interpolant), or at the step's end itself.
+  static void interpolateStep(WalkerState& state, double done);
+  // Whether the state is still the integrator's: q and q̇ as the integrator left them.
+  static bool isIntegratorState(const WalkerState& state);
   // What the event and fall checks need of a pose, from one set of phasors.
   struct Geometry {
     double swing_clearance;   // swing sole height above the ground
