@@ -8,12 +8,16 @@
 //                               projection + likelihood, summed over threads
 //   resample_ms=                wall time of resampling (with its re-propagation), per frame
 //   likelihood_us_per_particle= dynamics_us_per_particle=  per particle step
+//   resampled_frames=           frames that resampled, of those tracked: each costs Δs more
+//                               propagations (the paper's resampling from t − Δs); mean_ms= is
+//                               the mean wall time per frame, resampling frames included
 //
 //   rosrun kneed_walker bench_tracker --camera ../shared/data/pets2009/View_001_camera.yml
 //          [--particles 5000] [--frames 40] [--fps 30]
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <numeric>
 #include <vector>
 
 #include "kneed_walker/core/common/parallel.h"
@@ -86,9 +90,10 @@ int main(int argc, char** argv) {
       kw::tracking::Tracker tracker(camera, walk.ground, table, prior, options);
       tracker.setBackground(background);
       std::vector<double> total, precompute, dynamics, likelihood, resample, per_particle, dynamics_per_particle;
+      int resampled = 0;
       tracker.start(images[0], 0.0, guess);
       for (size_t i = 1; i < images.size(); ++i) {
-        tracker.track(images[i], i / fps);
+        resampled += tracker.track(images[i], i / fps).resampled;
         const kw::tracking::TrackerTiming& t = tracker.timing();
         total.push_back(t.total_ms);
         precompute.push_back(t.precompute_ms);
@@ -100,9 +105,10 @@ int main(int argc, char** argv) {
       }
       std::printf("threads=%d tracker_ms_per_frame=%.1f per_frame_precompute_ms=%.1f dynamics_ms=%.1f "
                   "likelihood_ms=%.1f resample_ms=%.1f likelihood_us_per_particle=%.2f "
-                  "dynamics_us_per_particle=%.2f\n",
+                  "dynamics_us_per_particle=%.2f resampled_frames=%d/%zu mean_ms=%.1f\n",
                   threads, median(total), median(precompute), median(dynamics), median(likelihood), median(resample),
-                  median(per_particle), median(dynamics_per_particle));
+                  median(per_particle), median(dynamics_per_particle), resampled, total.size(),
+                  std::accumulate(total.begin(), total.end(), 0.0) / total.size());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_tracker: %s\n", e.what());
