@@ -183,26 +183,34 @@ AdvanceReport WalkerSimulator::advance(const WalkerControls& controls, WalkerSta
   return run(controls, state, duration, false, integrals);
 }
 
-void WalkerSimulator::interpolateStep(WalkerState& state, double done) {
-  StepInProgress& step = state.step;
-  step.done = done;
+namespace {
+
+// q and q̇ `done` model time into a step (its cubic Hermite interpolant).
+void stepPose(const StepInProgress& step, double done, Vector5& q, Vector5& qdot) {
   const double h = step.duration, s = done / h;
-  state.q = hermitePosition(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
-  state.qdot = hermiteRate(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
+  q = hermitePosition(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
+  qdot = hermiteRate(step.start_q, step.start_qdot, step.end_q, step.end_qdot, h, s);
   // Between ends that keep a knee within its limit, the interpolant may pass it by a few µrad
   // (a free knee grazing the limit): the knee is shown on its limit there.
-  if (kneeFlexion(state.q, 0) < 0) state.q[kStanceShank] = state.q[kStanceThigh];
-  if (kneeFlexion(state.q, 1) < 0) state.q[kSwingShank] = state.q[kSwingThigh];
-  state.time_in_stride = step.start_time_in_stride + done;
+  if (kneeFlexion(q, 0) < 0) q[kStanceShank] = q[kStanceThigh];
+  if (kneeFlexion(q, 1) < 0) q[kSwingShank] = q[kSwingThigh];
+}
+
+}  // namespace
+
+void WalkerSimulator::interpolateStep(WalkerState& state, double done) {
+  state.step.done = done;
+  stepPose(state.step, done, state.q, state.qdot);
+  state.time_in_stride = state.step.start_time_in_stride + done;
 }
 
 bool WalkerSimulator::isIntegratorState(const WalkerState& state) {
   const StepInProgress& step = state.step;
   if (!step.valid) return false;
   if (step.duration == 0) return state.q == step.end_q && state.qdot == step.end_qdot;
-  WalkerState expected = state;
-  interpolateStep(expected, step.done);
-  return state.q == expected.q && state.qdot == expected.qdot;
+  Vector5 q, qdot;
+  stepPose(step, step.done, q, qdot);
+  return state.q == q && state.qdot == qdot;
 }
 
 AdvanceReport WalkerSimulator::run(const WalkerControls& controls, WalkerState& state,
