@@ -117,12 +117,16 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
     }
     outline.size = 0;
     if (!outline.visible) continue;
-    // The hull's support point in each direction is the farther ellipse's; consecutive
-    // directions can share one.
-    for (int k = 0; k < K; ++k) {
-      const int end = reach[1](k) > reach[0](k) ? 1 : 0;
-      const Eigen::Vector2d point(support_x[end](k), support_y[end](k));
-      if (outline.size == 0 || point != outline.hull[outline.size - 1]) outline.hull[outline.size++] = point;
+    // The hull's support point in each direction is the farther ellipse's (chosen in all
+    // directions at once); consecutive directions can share one.
+    const auto distal_farther = reach[1] > reach[0];
+    const Row hull_x = distal_farther.select(support_x[1], support_x[0]);
+    const Row hull_y = distal_farther.select(support_y[1], support_y[0]);
+    outline.hull[0] = Eigen::Vector2d(hull_x(0), hull_y(0));
+    outline.size = 1;
+    for (int k = 1; k < K; ++k) {
+      const Eigen::Vector2d& last = outline.hull[outline.size - 1];
+      if (hull_x(k) != last.x() || hull_y(k) != last.y()) outline.hull[outline.size++] = Eigen::Vector2d(hull_x(k), hull_y(k));
     }
     if (outline.size > 1 && outline.hull[outline.size - 1] == outline.hull[0]) --outline.size;
     outline.depth_m = camera.depth(0.5 * (axes.proximal[p] + axes.distal[p]));
