@@ -50,18 +50,41 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
   }
 }
 
+namespace {
+
+// ceil and floor by truncation and a correction: exact for |x| < 2³¹, and inline, where
+// std::ceil without SSE4.1 is a call.
+inline int ceilToInt(double x) {
+  const int truncated = static_cast<int>(x);
+  return truncated + (static_cast<double>(truncated) < x);
+}
+inline int floorToInt(double x) {
+  const int truncated = static_cast<int>(x);
+  return truncated - (static_cast<double>(truncated) > x);
+}
+
+}  // namespace
+
 void rasterize(const PartOutline& outline, RowSpans& spans) {
   spans.rows = 0;
   if (!outline.visible || outline.size < 3) return;
-  double y_min = outline.hull[0].y(), y_max = y_min;
-  for (int i = 1; i < outline.size; ++i) {
-    y_min = std::min(y_min, outline.hull[i].y());
-    y_max = std::max(y_max, outline.hull[i].y());
+  // The outline's extent and orientation (twice its signed area, shoelace formula).
+  const int n = outline.size;
+  const Eigen::Vector2d* hull = outline.hull.data();
+  double y_min = hull[0].y(), y_max = y_min, x_min = hull[0].x(), x_max = x_min;
+  double twice_area = 0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d& p = hull[i];
+    const Eigen::Vector2d& q = hull[i + 1 < n ? i + 1 : 0];  // a compare, not `% n`: no division per edge
+    y_min = std::min(y_min, p.y()), y_max = std::max(y_max, p.y());
+    x_min = std::min(x_min, p.x()), x_max = std::max(x_max, p.x());
+    twice_area += p.x() * q.y() - q.x() * p.y();
   }
-  // Pixel centres at integer coordinates; guard against absurd outlines (far off the image).
-  if (!(y_max - y_min < 1e5) || std::abs(y_min) > 1e6) return;
-  spans.first_row = static_cast<int>(std::ceil(y_min));
-  spans.rows = static_cast<int>(std::floor(y_max)) - spans.first_row + 1;
+  // Pixel centres at integer coordinates; outlines far off the image (whose columns would not
+  // fit an int) cover no pixel.
+  if (!(std::max(std::abs(y_min), std::abs(y_max)) < 1e6) || !(std::max(std::abs(x_min), std::abs(x_max)) < 1e6)) return;
+  spans.first_row = ceilToInt(y_min);
+  spans.rows = floorToInt(y_max) - spans.first_row + 1;
   if (spans.rows <= 0) {
     spans.rows = 0;
     return;
@@ -69,42 +92,42 @@ void rasterize(const PartOutline& outline, RowSpans& spans) {
   if (static_cast<int>(spans.left.size()) < spans.rows) {
     spans.left.resize(spans.rows);
     spans.right.resize(spans.rows);
-    spans.chain_x[0].resize(spans.rows);
-    spans.chain_x[1].resize(spans.rows);
   }
   // A convex outline in order is two chains from its top to its bottom vertex, one of edges
-  // going down, one going up; every row between crosses each chain once. Each edge writes its
-  // chain's x on its rows, and a row's span lies between its two chains' x.
-  // The next vertex by a compare, not `% size`, an integer division per edge (rasterize's share
-  // of bench_tracker's perf samples 12.8 -> 11.9 %, its instructions -3 %).
-  for (int i = 0; i < outline.size; ++i) {
-    const Eigen::Vector2d& p = outline.hull[i];
-    const Eigen::Vector2d& q = outline.hull[i + 1 < outline.size ? i + 1 : 0];
-    const int r0 = std::max(static_cast<int>(std::ceil(std::min(p.y(), q.y()))), spans.first_row);
-    const int r1 = std::min(static_cast<int>(std::floor(std::max(p.y(), q.y()))), spans.first_row + spans.rows - 1);
+  // going down, one going up; every row between crosses each chain once. With a positive
+  // signed area (image coordinates) the chain going down is the right one, else the left one.
+  // Each edge writes its chain's column bound on its rows: the left chain's x rounded up, the
+  // right one's x rounded down plus one, so that a row's pixels are [left, right). An outline's
+  // edges span a few rows each (16 edges, about 30 rows a part in bench_tracker): the work per
+  // edge is what costs, so each vertex's rows are rounded once, and the columns are written as
+  // integers straight away (no chains of doubles, no second pass).
+  const bool down_is_right = twice_area > 0;
+  int* const left = spans.left.data() - spans.first_row;  // row r at left[r]
+  int* const right = spans.right.data() - spans.first_row;
+  std::array<int, kOutlineVertices> first_row_at, last_row_at;  // a vertex's ceil(y) and floor(y)
+  for (int i = 0; i < n; ++i) {
+    first_row_at[i] = ceilToInt(hull[i].y());
+    last_row_at[i] = floorToInt(hull[i].y());
+  }
+  for (int i = 0; i < n; ++i) {
+    const int j = i + 1 < n ? i + 1 : 0;
+    const Eigen::Vector2d& p = hull[i];
+    const Eigen::Vector2d& q = hull[j];
+    const bool down = q.y() > p.y();
+    const int r0 = down ? first_row_at[i] : first_row_at[j];
+    const int r1 = down ? last_row_at[j] : last_row_at[i];
     if (r0 > r1) continue;
     if (p.y() == q.y()) {  // a level edge on a pixel row: its ends are the chains' ends there
-      spans.chain_x[0][r0 - spans.first_row] = p.x();
-      spans.chain_x[1][r0 - spans.first_row] = q.x();
+      left[r0] = ceilToInt(std::min(p.x(), q.x()));
+      right[r0] = floorToInt(std::max(p.x(), q.x())) + 1;
       continue;
     }
-    double* chain = spans.chain_x[q.y() > p.y() ? 0 : 1].data();  // row r at chain[r - first_row]
     const double slope = (q.x() - p.x()) / (q.y() - p.y());
-    for (int r = r0; r <= r1; ++r) chain[r - spans.first_row] = p.x() + (r - p.y()) * slope;
-  }
-  // ceil and floor by truncation and a correction (exact; the compiler vectorises it, where
-  // std::ceil without SSE4.1 is a branchy sequence per row).
-  const double* chain_a = spans.chain_x[0].data();
-  const double* chain_b = spans.chain_x[1].data();
-  int* left = spans.left.data();
-  int* right = spans.right.data();
-  for (int k = 0; k < spans.rows; ++k) {
-    const double lo = std::min(chain_a[k], chain_b[k]), hi = std::max(chain_a[k], chain_b[k]);
-    const int lo_truncated = static_cast<int>(lo), hi_truncated = static_cast<int>(hi);
-    const int ceil_lo = lo_truncated + (static_cast<double>(lo_truncated) < lo);
-    const int floor_hi = hi_truncated - (static_cast<double>(hi_truncated) > hi);
-    left[k] = ceil_lo;
-    right[k] = std::max(ceil_lo, floor_hi + 1);
+    if (down != down_is_right) {
+      for (int r = r0; r <= r1; ++r) left[r] = ceilToInt(p.x() + (r - p.y()) * slope);
+    } else {
+      for (int r = r0; r <= r1; ++r) right[r] = floorToInt(p.x() + (r - p.y()) * slope) + 1;
+    }
   }
 }
 
@@ -218,9 +241,11 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
   std::sort(order.begin(), order.end(), [&](int a, int b) { return outlines[a].depth_m < outlines[b].depth_m; });
   for (int p = 0; p < kParts; ++p) rasterize(outlines[p], spans[p]);
   // The image motion each part predicts: the similarity that takes its axis now to its axis in
-  // the previous frame maps a point now to where it was.
+  // the previous frame maps a point z now (as a complex number) to where it was,
+  // b + s (z − a) (a, b the proximal end now and before, s = axis before / axis now); the motion
+  // since is z − that = (1 − s) z − (b − s a), motion_gain z − motion_offset.
   const bool flow = evidence.hasFlow() && previous != nullptr;
-  std::array<std::complex<double>, kParts> flow_scale;
+  std::array<std::complex<double>, kParts> motion_gain, motion_offset;
   std::array<bool, kParts> has_motion{};
   if (flow) {
     for (int p = 0; p < kParts; ++p) {
@@ -231,7 +256,10 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       const std::complex<double> axis_before(before.ends_px[1].x() - before.ends_px[0].x(),
                                              before.ends_px[1].y() - before.ends_px[0].y());
       if (std::abs(axis) < 1e-6) continue;
-      flow_scale[p] = axis_before / axis;
+      const std::complex<double> scale = axis_before / axis;
+      motion_gain[p] = 1.0 - scale;
+      motion_offset[p] = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) -
+                         scale * std::complex<double>(now.ends_px[0].x(), now.ends_px[0].y());
       has_motion[p] = true;
     }
   }
@@ -275,20 +303,16 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
         const Interval seen = appearance.add(evidence, kind, y, row_inside, pieces[i]);
         const int ca = seen.begin, cb = seen.end;
         if (flow_row && ca < cb) {
-          const PartOutline& now = outlines[p];
-          const PartImageAxis& before = (*previous)[p];
           const FlowField::RowPoints grid = evidence.flow().rowPoints(y, ca, cb);
-          for (int i = 0, x = grid.first_x; i < grid.count; ++i, x += step) {
-            // Where this point of the part was in the previous frame.
-            const std::complex<double> from(x - now.ends_px[0].x(), y - now.ends_px[0].y());
-            const std::complex<double> was = std::complex<double>(before.ends_px[0].x(), before.ends_px[0].y()) +
-                                             flow_scale[p] * from;
+          // The predicted motion is linear along the row: one complex add per point.
+          std::complex<double> motion_px = motion_gain[p] * std::complex<double>(grid.first_x, y) - motion_offset[p];
+          const std::complex<double> motion_step_px = motion_gain[p] * static_cast<double>(step);
+          for (int i = 0; i < grid.count; ++i, motion_px += motion_step_px) {
             const FlowPoint& point = grid.first[i];
-            motion.add(FlowField::squaredError(point, static_cast<float>(x - was.real()),
-                                               static_cast<float>(y - was.imag())),
+            motion.add(FlowField::squaredError(point, static_cast<float>(motion_px.real()), static_cast<float>(motion_px.imag())),
                        point.log1p_background);
-            ++points;
           }
+          points += grid.count;
         }
       }
     }

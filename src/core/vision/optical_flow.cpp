@@ -18,6 +18,12 @@ void FlowField::compute(const cv::Mat& previous_grey, const cv::Mat& grey, const
   columns_ = std::max(0, (roi.x + roi.width - 1) / step_ - first_column_ + 1);
   rows_ = std::max(0, (roi.y + roi.height - 1) / step_ - first_row_ + 1);
   points_.assign(static_cast<size_t>(columns_) * rows_, FlowPoint{});
+  roi_ = roi;
+  grid_column_at_.resize(roi.width + 1);
+  for (int c = 0; c <= roi.width; ++c)  // ⌈x / step⌉ for x ≥ 0, as a grid column index
+    grid_column_at_[c] = std::clamp((roi.x + c + step_ - 1) / step_ - first_column_, 0, columns_);
+  grid_row_at_.resize(roi.height);
+  for (int r = 0; r < roi.height; ++r) grid_row_at_[r] = (roi.y + r) % step_ == 0 ? (roi.y + r) / step_ - first_row_ : -1;
   if (points_.empty()) return;
 
   // Flow from the current frame back to the previous one, at the current frame's pixels:

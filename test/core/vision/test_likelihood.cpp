@@ -222,14 +222,14 @@ TEST(Likelihood, ANearerPartHidesAFartherOne) {
 }
 
 // rasterize() against the definition: a pixel belongs to an outline when its centre (integer
-// coordinates) lies inside or on it. Random convex outlines in any position and orientation,
-// and ones with vertices and level edges exactly on pixel rows.
+// coordinates) lies inside or on it. Random convex outlines in any position, in either order
+// (clockwise or not), and ones with vertices and level edges exactly on pixel rows.
 TEST(Rasterize, CoversExactlyThePixelCentresInsideTheOutline) {
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-20.0, 60.0);
-  auto check = [](const std::vector<cv::Point2f>& corners, const std::string& name) {
+  auto check = [](const std::vector<cv::Point2f>& corners, const std::string& name, bool clockwise = false) {
     std::vector<cv::Point2f> hull;  // cv::convexHull takes float points
-    cv::convexHull(corners, hull);
+    cv::convexHull(corners, hull, clockwise);
     PartOutline outline;
     outline.visible = true;
     outline.size = static_cast<int>(hull.size());
@@ -255,7 +255,7 @@ TEST(Rasterize, CoversExactlyThePixelCentresInsideTheOutline) {
   for (int trial = 0; trial < 300; ++trial) {
     std::vector<cv::Point2f> corners(3 + trial % 14);
     for (auto& c : corners) c = cv::Point2d(coordinate(random), coordinate(random));
-    covered += check(corners, "random outline " + std::to_string(trial));
+    covered += check(corners, "random outline " + std::to_string(trial), trial % 2 == 1);
   }
   EXPECT_GT(covered, 100000);
   // Pixels strictly inside: 9 × 5 for the square; 8, 6, 4, 4 and 2 on rows 4 to 8 for the triangle.

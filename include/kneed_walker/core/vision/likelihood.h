@@ -97,12 +97,12 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
                           const BodyImageAxes* previous, const LikelihoodOptions& options,
                           PartScores* scores = nullptr);
 
-// The pixels inside a convex outline: per image row y in [first_row, first_row + rows), the
-// columns [left[i], right[i]). Used by evaluateLikelihood and to sample appearance pixels.
+// The pixels inside a convex outline (either orientation): per image row y in
+// [first_row, first_row + rows), the columns [left[i], right[i]), none when left[i] >= right[i].
+// Used by evaluateLikelihood and to sample appearance pixels.
 struct RowSpans {
   int first_row = 0, rows = 0;
   std::vector<int> left, right;
-  std::array<std::vector<double>, 2> chain_x;  // scratch: the outline's x on each row, per chain
 };
 void rasterize(const PartOutline& outline, RowSpans& spans);
 

@@ -38,22 +38,23 @@ class FlowField {
   bool empty() const { return points_.empty(); }
   int step() const { return step_; }
   // The grid points of image row y (a multiple of step()) at columns [x0, x1): x0 rounded up to
-  // a multiple of step(), the first point, and how many, for walking a span without a division
-  // per point. count 0 when none.
+  // a multiple of step(), the first point, and how many; count 0 when none. By look-up tables,
+  // not divisions: it runs per visible part row on the grid, per particle (its three integer
+  // divisions were most of the flow term's time).
   struct RowPoints {
     int first_x = 0, count = 0;
     const FlowPoint* first = nullptr;
   };
   RowPoints rowPoints(int y, int x0, int x1) const {
     RowPoints r;
-    const int j = y / step_ - first_row_;
-    if (j < 0 || j >= rows_) return r;
-    const int i0 = std::max((x0 + step_ - 1) / step_, first_column_) - first_column_;  // x0 ≥ 0
-    const int i1 = std::min((x1 + step_ - 1) / step_, first_column_ + columns_) - first_column_;
+    const int row = y - roi_.y;
+    if (row < 0 || row >= roi_.height || grid_row_at_[row] < 0) return r;
+    const int i0 = grid_column_at_[std::clamp(x0 - roi_.x, 0, roi_.width)];
+    const int i1 = grid_column_at_[std::clamp(x1 - roi_.x, 0, roi_.width)];
     if (i0 >= i1) return r;
     r.first_x = (i0 + first_column_) * step_;
     r.count = i1 - i0;
-    r.first = &points_[static_cast<size_t>(j) * columns_ + i0];
+    r.first = &points_[static_cast<size_t>(grid_row_at_[row]) * columns_ + i0];
     return r;
   }
   // e² = (v − u)ᵀ A (v − u) of eq. 13 at a grid point, for a predicted motion u (px). Inline:
@@ -66,6 +67,9 @@ class FlowField {
  private:
   std::vector<FlowPoint> points_;
   int step_ = 1, first_column_ = 0, first_row_ = 0, columns_ = 0, rows_ = 0;
+  cv::Rect roi_;
+  std::vector<int> grid_column_at_;  // at x − roi.x (0 to roi.width): the first grid column at or right of x
+  std::vector<int> grid_row_at_;     // at y − roi.y: y's grid row, −1 if y is not a multiple of step()
 };
 
 }  // namespace kneed_walker::core::vision
