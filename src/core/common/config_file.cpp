@@ -1,6 +1,7 @@
 #include "kneed_walker/core/common/config_file.h"
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -166,8 +167,19 @@ ConfigFile::ConfigFile(const std::string& path, const std::string& what)
     : ConfigNode(std::make_shared<Shared>(), cv::FileNode(), "") {
   shared_->file_path = path;
   shared_->what = what;
+  // OpenCV's YAML reader needs the "%YAML:1.0" directive, which other programs' YAML (ROS's
+  // camera_info files) leaves out: such a file is read with the directive put before it.
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path + ": cannot open the " + what);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const bool yaml_directive = text.str().rfind("%YAML", 0) == 0;
+  const bool yaml_name = path.size() >= 5 && (path.substr(path.size() - 5) == ".yaml" || path.substr(path.size() - 4) == ".yml");
   try {
-    storage_.open(path, cv::FileStorage::READ);
+    if (!yaml_directive && yaml_name)
+      storage_.open("%YAML:1.0\n" + text.str(), cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    else
+      storage_.open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& e) {
     throw std::invalid_argument(path + ": not a readable " + what + ": " + e.what());
   }

@@ -28,6 +28,25 @@ std::string problems(const std::string& path, Read read) {
   return "";
 }
 
+// Other programs' YAML (ROS's camera_info files) has no "%YAML:1.0" line, which OpenCV's
+// reader needs: it is read all the same.
+TEST(ConfigFile, ReadsYamlWithoutTheDirective) {
+  const std::string path = ::testing::TempDir() + "/kneed_walker_config_plain.yaml";
+  std::ofstream(path) << "image_width: 640\ncamera_matrix:\n  rows: 3\n  data: [1, 2, 3]\n";
+  int width = 0;
+  std::vector<double> data;
+  EXPECT_EQ(problems(path, [&](ConfigFile& file) {
+              file.read("image_width", width, Need::kRequired);
+              ConfigNode matrix = file.map("camera_matrix");
+              int rows = 0;
+              matrix.read("rows", rows);
+              matrix.read("data", data, Need::kRequired, 3);
+            }),
+            "");
+  EXPECT_EQ(width, 640);
+  EXPECT_EQ(data, (std::vector<double>{1, 2, 3}));
+}
+
 TEST(ConfigFile, ReadsTypedValuesAndKeepsDefaultsOfAbsentKeys) {
   const std::string path = writeFile("good",
       "rate: 2.5\ncount: 3\nflag: 1\nname: \"walker\"\nlist: [1, 2.5, 3]\n"
