@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <variant>
 #include <vector>
 
 namespace kneed_walker::ros_glue {
@@ -112,87 +113,89 @@ class ParameterReader {
   std::vector<std::string> problems_;
 };
 
+// Reads every option of a table by its name.
+template <class Options>
+void readTable(ParameterReader& reader, const core::common::OptionTable<Options>& table, Options& options) {
+  for (const auto& spec : table) std::visit([&](auto* value) { reader.read(spec.name, *value); }, spec.field(options));
+}
+
 }  // namespace
+
+const core::common::OptionTable<RosInterfaceOptions>& rosInterfaceOptionTable() {
+  using core::common::OptionField;
+  using O = RosInterfaceOptions;
+  static const core::common::OptionTable<RosInterfaceOptions> table{
+      {"image_queue_size", [](O& o) -> OptionField { return &o.image_queue_size; }, 1, 100, "frames",
+       "frames that wait while one is tracked; a frame arriving at a full queue pushes out the oldest (dropped)"},
+      {"publish_particle_cloud", [](O& o) -> OptionField { return &o.publish_particle_cloud; }, 0, 0, "",
+       "publish ~particle_cloud"},
+      {"particle_cloud_interval_s", [](O& o) -> OptionField { return &o.particle_cloud_interval_s; }, 0, 3600, "s",
+       "at most one ~particle_cloud per this interval"},
+      {"publish_tf", [](O& o) -> OptionField { return &o.publish_tf; }, 0, 0, "",
+       "broadcast body_<id> and its joint frames on /tf"},
+      {"publish_overlay", [](O& o) -> OptionField { return &o.publish_overlay; }, 0, 0, "",
+       "publish ~overlay while someone subscribes"},
+      {"camera_file_unit_m", [](O& o) -> OptionField { return &o.camera_file_unit_m; }, 1e-6, 1e3, "m",
+       "metres per unit of the camera file's translation"},
+      {"prior_noise_scale", [](O& o) -> OptionField { return &o.prior_noise_scale; }, 0, 100, "",
+       "factor on the prior's torque noise scales s_j (eq. 11)"},
+  };
+  return table;
+}
+
+namespace {
+
+template <class Options>
+void markdownRows(const core::common::OptionTable<Options>& table, std::ostringstream& out) {
+  Options defaults;
+  for (const auto& spec : table) {
+    const core::common::OptionField field = spec.field(defaults);
+    out << "| `" << spec.name << "` | " << core::common::valueText(field) << " | " << spec.unit << " | ";
+    if (!std::holds_alternative<bool*>(field)) {
+      double min = spec.min, max = spec.max;
+      out << "[" << core::common::valueText(&min) << ", " << core::common::valueText(&max) << "]";
+    }
+    out << " | " << spec.help << " |\n";
+  }
+}
+
+}  // namespace
+
+std::string parameterTableMarkdown() {
+  std::ostringstream out;
+  out << "| parameter | default | unit | range | meaning |\n|---|---|---|---|---|\n";
+  markdownRows(core::tracking::trackerOptionTable(), out);
+  markdownRows(core::vision::likelihoodOptionTable(), out);
+  markdownRows(core::tracking::sessionOptionTable(), out);
+  markdownRows(rosInterfaceOptionTable(), out);
+  return out.str();
+}
 
 TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   TrackerNodeConfig config;
   ParameterReader reader(private_nh);
-
-  core::tracking::TrackerOptions& t = config.tracker;
-  reader.read("num_particles", t.num_particles);
-  // Unset, the threshold follows the particle count (the paper's 500 of 5000).
-  t.resample_ess_threshold = t.num_particles / 10.0;
-  reader.read("resample_ess_threshold", t.resample_ess_threshold);
-  reader.read("resample_lag_frames", t.resample_lag_frames);
-  reader.read("resample_mixing", t.resample_mixing);
-  reader.read("initial_oversampling", t.initial_oversampling);
-  reader.read("num_threads", t.num_threads);
-  reader.read("seed", t.seed);
-  reader.read("person_height_m", t.person_height_m);
-  reader.read("person_mass_kg", t.person_mass_kg);
-  reader.read("ground_slope_rad", t.ground_slope_rad);
-  reader.read("min_gait_speed_kmh", t.min_gait_speed_kmh);
-  reader.read("min_gait_step_m", t.min_gait_step_m);
-  reader.read("person_breadth_scale", t.person_breadth_scale);
-  reader.read("gait_speed_sd_kmh", t.gait_speed_sd_kmh);
-  reader.read("gait_step_sd_m", t.gait_step_sd_m);
-  reader.read("gait_change_persistence", t.gait_change_persistence);
-  reader.read("lost_likelihood_fraction", t.lost_likelihood_fraction);
-  reader.read("gait_slope_change_probability", t.gait_slope_change_probability);
-  std::string hill_gaits = t.hill_gaits == core::tracking::HillGaits::kNearest ? "nearest" : "level_to_nearest";
-  reader.read("hill_gaits", hill_gaits);
-  if (hill_gaits == "nearest")
-    t.hill_gaits = core::tracking::HillGaits::kNearest;
-  else if (hill_gaits == "level_to_nearest")
-    t.hill_gaits = core::tracking::HillGaits::kLevelToNearest;
-  else
-    reader.addProblem(reader.qualified("hill_gaits") + " = '" + hill_gaits + "' must be nearest or level_to_nearest");
-  reader.read("default_frame_interval_s", t.default_frame_interval_s);
-  reader.read("max_frame_gap_s", t.max_frame_gap_s);
-  reader.read("use_optical_flow", config.likelihood.use_flow);
-
+  readTable(reader, core::tracking::trackerOptionTable(), config.tracker);
+  readTable(reader, core::vision::likelihoodOptionTable(), config.likelihood);
+  readTable(reader, core::tracking::sessionOptionTable(), config.session);
   RosInterfaceOptions& r = config.ros;
+  readTable(reader, rosInterfaceOptionTable(), r);
   reader.read("world_frame", r.world_frame);
-  reader.read("image_queue_size", r.image_queue_size);
   reader.read("image_transport", r.image_transport);
-  reader.read("publish_particle_cloud", r.publish_particle_cloud);
-  reader.read("publish_tf", r.publish_tf);
-  reader.read("particle_cloud_interval_s", r.particle_cloud_interval_s);
-  reader.read("publish_overlay", r.publish_overlay);
-  // dynamic_reconfigure's button (cfg/Tracker.cfg) sits beside the parameters it starts from;
-  // it means nothing at start.
-  bool restart = false;
-  reader.read("restart", restart);
   reader.read("camera_file", r.camera_file);
-  reader.read("camera_file_unit_m", r.camera_file_unit_m);
   reader.read("init_box", r.init_box);
   reader.read("gait_table", r.gait_table);
   reader.read("prior_config", r.prior_config);
   reader.read("walker_model", r.walker_model);
-  reader.read("prior_noise_scale", r.prior_noise_scale);
+  // dynamic_reconfigure's button (cfg/Tracker.cfg) sits beside the parameters it starts from;
+  // it means nothing at start.
+  bool restart = false;
+  reader.read("restart", restart);
 
-  core::tracking::SessionOptions& session = config.session;
-  reader.read("background_frames", session.background_frames);
-  reader.read("heading_frames", session.heading_frames);
-  reader.read("find_people", session.find_people);
-  reader.read("min_start_speed_kmh", session.min_start_speed_kmh);
-  reader.read("max_start_speed_kmh", session.max_start_speed_kmh);
-  reader.read("max_people", session.max_people);
-  reader.read("merge_distance_m", session.merge_distance_m);
-  reader.read("reacquire_distance_m", session.reacquire_distance_m);
-  reader.read("estimate_person_height", session.estimate_person_height);
-  reader.read("min_person_height_m", session.min_person_height_m);
-  reader.read("max_person_height_m", session.max_person_height_m);
-  for (const auto& problem : validate(session)) reader.addProblem(reader.qualified(problem));
-  if (!(std::isfinite(r.particle_cloud_interval_s) && r.particle_cloud_interval_s >= 0 && r.particle_cloud_interval_s <= 3600))
-    reader.addProblem(reader.qualified("particle_cloud_interval_s") + " = " + std::to_string(r.particle_cloud_interval_s) +
-                      " is outside [0, 3600]");
-  if (!(std::isfinite(r.prior_noise_scale) && r.prior_noise_scale >= 0 && r.prior_noise_scale <= 100))
-    reader.addProblem(reader.qualified("prior_noise_scale") + " = " + std::to_string(r.prior_noise_scale) +
-                      " is outside [0, 100]");
-  if (!(std::isfinite(r.camera_file_unit_m) && r.camera_file_unit_m >= 1e-6 && r.camera_file_unit_m <= 1e3))
-    reader.addProblem(reader.qualified("camera_file_unit_m") + " = " + std::to_string(r.camera_file_unit_m) +
-                      " is outside [1e-06, 1000]");
+  for (const auto& problem : validate(config.tracker)) reader.addProblem(reader.qualified(problem));
+  for (const auto& problem : validate(config.likelihood)) reader.addProblem(reader.qualified(problem));
+  for (const auto& problem : validate(config.session)) reader.addProblem(reader.qualified(problem));
+  for (const auto& problem : core::common::rangeProblems(r, rosInterfaceOptionTable()))
+    reader.addProblem(reader.qualified(problem));
   if (r.image_transport != "raw" && r.image_transport != "compressed" && r.image_transport != "theora")
     reader.addProblem(reader.qualified("image_transport") + " = '" + r.image_transport +
                       "' must be raw, compressed or theora");
@@ -208,13 +211,9 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
     if (!path->empty() && !std::ifstream(*path))
       reader.addProblem(reader.qualified(name) + " = '" + *path + "': cannot read the file");
 
-  for (const auto& problem : validate(t)) reader.addProblem(reader.qualified(problem));
   if (r.world_frame.empty() || r.world_frame.front() == '/')
     reader.addProblem(reader.qualified("world_frame") + " = '" + r.world_frame +
                       "' must be a non-empty tf2 frame id without a leading '/'");
-  if (r.image_queue_size < 1 || r.image_queue_size > 100)
-    reader.addProblem(reader.qualified("image_queue_size") + " = " +
-                      std::to_string(r.image_queue_size) + " is outside [1, 100]");
   reader.reportUnknown();
 
   if (!reader.problems().empty()) {

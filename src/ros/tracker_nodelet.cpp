@@ -195,7 +195,7 @@ void TrackerNodelet::onInit() {
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   overlay_publisher_ = image_transport::ImageTransport(private_nh).advertise("overlay", 2);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-  live_ = {config_.tracker.num_particles, config_.ros.prior_noise_scale, config_.ros.publish_tf,
+  live_ = {config_.tracker.filter.num_particles, config_.ros.prior_noise_scale, config_.ros.publish_tf,
            config_.ros.publish_particle_cloud, config_.ros.publish_overlay, config_.ros.particle_cloud_interval_s};
   publishing_ = live_;
   if (!file_camera_) {
@@ -216,7 +216,7 @@ void TrackerNodelet::onInit() {
   diagnostics_->add(*output_rate_);
   diagnostics_->add(*output_latency_);
   diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
-  num_particles_ = config_.tracker.num_particles;
+  num_particles_ = config_.tracker.filter.num_particles;
   // What may change while running starts from the parameters just validated (cfg/Tracker.cfg).
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TrackerConfig>>(private_nh);
   reconfigure_server_->setCallback(
@@ -243,7 +243,7 @@ void TrackerNodelet::onInit() {
       image_transport::TransportHints(config_.ros.image_transport, ros::TransportHints(), private_nh));
   NODELET_INFO("tracking up to %d %s with %d particles each (seed %lu), %.2f m tall; input %s; camera %s",
                config_.session.max_people, config_.session.max_people == 1 ? "person" : "people",
-               config_.tracker.num_particles, static_cast<unsigned long>(config_.tracker.seed), config_.tracker.person_height_m,
+               config_.tracker.filter.num_particles, static_cast<unsigned long>(config_.tracker.filter.seed), config_.tracker.person_height_m,
                camera_subscriber_.getTopic().c_str(),
                file_camera_ ? config_.ros.camera_file.c_str() : ("camera_info + tf from " + config_.ros.world_frame).c_str());
 }
@@ -382,11 +382,10 @@ void TrackerNodelet::process(const Frame& frame) {
     std::swap(restart, restart_requested_);
   }
   if (restart) {
-    // dynamic_reconfigure: a new particle count (the resampling threshold keeps its share), a new
-    // prior noise scale, or the restart button. The session is made again at this frame.
+    // dynamic_reconfigure: a new particle count, a new prior noise scale, or the restart button.
+    // The session is made again at this frame.
     const int particles = publishing_.num_particles;
-    config_.tracker.resample_ess_threshold *= static_cast<double>(particles) / config_.tracker.num_particles;
-    config_.tracker.num_particles = particles;
+    config_.tracker.filter.num_particles = particles;
     config_.ros.prior_noise_scale = publishing_.prior_noise_scale;
     NODELET_INFO("reconfigured: starting over with %d particles, prior noise x%g", particles,
                  config_.ros.prior_noise_scale);
@@ -561,7 +560,7 @@ void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state
   status->header.stamp = header.stamp;
   status->header.frame_id = config_.ros.world_frame;
   status->state = state;
-  status->num_particles = static_cast<uint32_t>(config_.tracker.num_particles);
+  status->num_particles = static_cast<uint32_t>(config_.tracker.filter.num_particles);
   status->people_tracked = static_cast<uint32_t>(people >= 0 ? people : session_ ? session_->trackCount() : 0);
   if (estimate) {
     status->effective_sample_size = estimate->effective_sample_size;

@@ -204,8 +204,8 @@ int main(int argc, char** argv) {
   std::vector<double> init_box, init_position;
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
-  int first_frame = 0, max_frames = 0, background_samples = 25, max_people = 1;
-  bool no_flow = false, filtered = false, lagged = false, background_from_start = false;
+  int first_frame = 0, max_frames = 0;
+  bool filtered = false, lagged = false, background_from_start = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
   auto* input = app.add_option_group("input", "one of --bag, --video");
@@ -236,71 +236,15 @@ int main(int argc, char** argv) {
   std::string init_stance;
   app.add_option("--init-stance", init_stance, "the leg on the ground in the first frame: left or right (default: unknown)")
       ->check(CLI::IsMember({"left", "right"}));
-  app.add_option("--min-speed", guess.min_speed_kmh, "slowest initial walking speed, km/h")->capture_default_str()
-      ->check(FiniteRange(0.0, 20.0));
-  app.add_option("--max-speed", guess.max_speed_kmh, "fastest initial walking speed, km/h")->capture_default_str()
-      ->check(FiniteRange(0.0, 20.0));
-  app.add_option("--min-gait-speed", options.min_gait_speed_kmh,
-                 "slowest gait of the table the particles may walk, km/h (1.5 with --min-gait-step 0.3: the slow "
-                 "walks of strolling people)")
-      ->capture_default_str()->check(FiniteRange(0.0, 20.0));
-  app.add_option("--gait-speed-sd", options.gait_speed_sd_kmh,
-                 "speed changes: the spread of a particle's target speed's random step at each heel strike, km/h")
-      ->capture_default_str()->check(FiniteRange(0.0, 5.0));
-  app.add_option("--gait-step-sd", options.gait_step_sd_m,
-                 "step changes: the spread of a particle's target step length's random step at each heel strike, m")
-      ->capture_default_str()->check(FiniteRange(0.0, 0.5));
-  app.add_option("--gait-change-persistence", options.gait_change_persistence,
-                 "speed and step changes: the fraction of a particle's last target step carried into its next at a heel strike "
-                 "(0: independent steps; 0.8 for people who change speed)")
-      ->capture_default_str()->check(FiniteRange(0.0, 0.95));
-  app.add_option("--lost-fraction", options.lost_likelihood_fraction,
-                 "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its "
-                 "recent median (0: below 0 only)")
-      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
-  app.add_option("--breadth", options.person_breadth_scale,
-                 "the person's torso and thighs this many times as broad as the body model's (a coat, arms)")
-      ->capture_default_str()->check(FiniteRange(0.5, 3.0));
-  app.add_option("--hill-gaits", options.hill_gaits,
-                 "on a hill, the particles walk the gaits of the table's slope nearest the ground's (nearest) or "
-                 "those and every slope's between it and the level (level-to-nearest)")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, kw::tracking::HillGaits>{
-          {"nearest", kw::tracking::HillGaits::kNearest}, {"level-to-nearest", kw::tracking::HillGaits::kLevelToNearest}}))
-      ->capture_default_str();
-  app.add_option("--gait-slope-change", options.gait_slope_change_probability,
-                 "on a hill: the chance per heel strike that a particle's gait moves to a neighbouring slope's")
-      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
-  app.add_option("--min-gait-step", options.min_gait_step_m, "shortest step of the table's gaits the particles may walk, m")
-      ->capture_default_str()->check(FiniteRange(0.0, 3.0));
-  app.add_option("--particles", options.num_particles, "particles (per person)")->capture_default_str()->check(CLI::Range(1, 1000000));
-  bool estimate_height = false;
-  app.add_flag("--estimate-height", estimate_height,
-               "track each person found in the image with the height of their blob on the ground (1.5-1.95 m) "
-               "instead of --height");
-  app.add_option("--max-people", max_people,
-                 "people tracked at once, each found walking by itself (as the nodelet's max_people): bodies 1..N")
-      ->capture_default_str()->check(CLI::Range(1, 16));
-  app.add_option("--ess-threshold", options.resample_ess_threshold, "resample below this N_eff (default N/10)")
-      ->check(FiniteRange(1e-9, 1e6));
-  app.add_option("--resample-lag", options.resample_lag_frames, "Δs: resample from this many frames back")
-      ->capture_default_str()->check(CLI::Range(0, 30));
-  app.add_option("--resample-mixing", options.resample_mixing, "γ: weight of the newest weights in the proposal")
-      ->capture_default_str()->check(FiniteRange(0.0, 1.0));
-  app.add_option("--initial-oversampling", options.initial_oversampling,
-                 "a track's first frame weighs this many times --particles candidates from the initial guess and keeps "
-                 "--particles of them")
-      ->capture_default_str()->check(CLI::Range(1, 1000));
-  app.add_option("--threads", options.num_threads, "threads; 0 = all cores")->capture_default_str()->check(CLI::Range(0, 256));
-  app.add_option("--seed", options.seed, "random seed")->capture_default_str();
-  app.add_option("--height", options.person_height_m, "the person's height, m")->capture_default_str()
-      ->check(FiniteRange(1.0, 2.3));
+  kw::tracking::SessionOptions session_options;
+  kneed_walker::tools::addTableOptions(app, kw::tracking::trackerOptionTable(), options);
+  kneed_walker::tools::addTableOptions(app, kw::tracking::sessionOptionTable(), session_options);
+  kneed_walker::tools::addTableOptions(app, kw::vision::likelihoodOptionTable(), likelihood);
   app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--frames", max_frames, "track at most this many frames (0: all)")->check(CLI::NonNegativeNumber);
-  app.add_option("--background-samples", background_samples, "frames spread over the input that learn the background")
-      ->capture_default_str()->check(CLI::Range(1, 500));
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
   app.add_flag("--background-from-start", background_from_start,
-               "learn the background from the first --background-samples frames, as the nodelet does, "
+               "learn the background from the first --background-frames frames, as the nodelet does, "
                "instead of frames spread over the whole input");
   auto* filtered_flag = app.add_flag("--filtered", filtered,
                                      "write each frame's best particle as it comes, instead of each track's whole MAP "
@@ -310,16 +254,6 @@ int main(int argc, char** argv) {
                "ancestry through the buffer; consecutive frames may come from different particles), instead "
                "of each track's whole MAP state sequence")
       ->excludes(filtered_flag);
-  app.add_flag("--no-flow", no_flow, "leave the optical flow out of the likelihood");
-  app.add_option("--appearance-weight", likelihood.appearance_weight, "weight of each part's appearance term")->capture_default_str()
-      ->check(FiniteRange(0.0, 100.0));
-  app.add_option("--flow-weight", likelihood.flow_weight, "weight of each part's flow term")->capture_default_str()
-      ->check(FiniteRange(0.0, 100.0));
-  app.add_option("--contact-weight", likelihood.contact_weight,
-                 "weight of the ground-contact term: the rows just below each foot should be background (0: off)")
-      ->capture_default_str()->check(FiniteRange(0.0, 100.0));
-  app.add_option("--flow-min-sd", likelihood.flow.min_sd_px, "floor of the flow's SD, px")->capture_default_str()
-      ->check(FiniteRange(0.01, 100.0));
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
@@ -335,13 +269,15 @@ int main(int argc, char** argv) {
                  "the MAP body's image box per frame and body, as written to --out-csv (frame,x1,y1,x2,y2,body; px): "
                  "the bounding box of the projected parts' outlines");
   CLI11_PARSE(app, argc, argv);
-  if (!app.count("--ess-threshold")) options.resample_ess_threshold = options.num_particles / 10.0;
-  options.keep_whole_path = !filtered && !lagged;
-  if (guess.min_speed_kmh > guess.max_speed_kmh) {
-    std::fprintf(stderr, "track_offline: --min-speed %g exceeds --max-speed %g\n", guess.min_speed_kmh,
-                 guess.max_speed_kmh);
-    return 1;
-  }
+  options.filter.keep_paths = !filtered && !lagged;
+  for (const std::vector<std::string>& problems : {validate(options), validate(session_options), validate(likelihood)})
+    if (!problems.empty()) {
+      std::fprintf(stderr, "track_offline: --%s\n", kw::common::kebabCase(problems.front()).c_str());
+      return 1;
+    }
+  // A track started from a box or a position starts on the same speeds as a person found.
+  guess.min_speed_kmh = session_options.min_start_speed_kmh;
+  guess.max_speed_kmh = session_options.max_start_speed_kmh;
   if (!strip_path.empty() && strip_frames.empty()) {
     std::fprintf(stderr, "track_offline: --strip needs --strip-frames\n");
     return 1;
@@ -407,17 +343,9 @@ int main(int argc, char** argv) {
     }
     const kw::vision::GroundPlane ground =
         camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(camera_path);
-    options.ground_slope_rad = ground.slope_rad;
+    if (!camera_path.empty()) options.ground_slope_rad = ground.slope_rad;  // the file's ground plane
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
-    likelihood.use_flow = !no_flow;
-    kw::tracking::SessionOptions session_options;
-    session_options.background_frames = background_samples;
-    // A person the session finds starts on the same speeds as one started from a box.
-    session_options.min_start_speed_kmh = guess.min_speed_kmh;
-    session_options.max_start_speed_kmh = guess.max_speed_kmh;
-    session_options.max_people = max_people;
-    session_options.estimate_person_height = estimate_height;
     kw::tracking::TrackingSession session(
         kw::tracking::trackerFactory(*camera, ground, table, kw::prior::loadPriorOptions(prior_path), options, likelihood),
         session_options);
@@ -431,7 +359,7 @@ int main(int argc, char** argv) {
       session.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
     } else if (!background_from_start) {
       std::vector<cv::Mat> samples;
-      const int n = std::max(1, std::min(background_samples, total));
+      const int n = std::max(1, std::min(session_options.background_frames, total));
       cv::Mat frame;
       double stamp;
       for (int index = 0, next = 0; static_cast<int>(samples.size()) < n && source->next(frame, stamp); ++index) {
@@ -539,7 +467,7 @@ int main(int argc, char** argv) {
           kw::vision::drawOverlay(picture, *camera, estimate.pose, outlines, cloud);
           const cv::Rect2d box = tracker.imageBox(estimate.pose);
           if (!box.empty()) {
-            if (max_people > 1)
+            if (session_options.max_people > 1)
               cv::putText(picture, std::to_string(person.body), cv::Point(cvRound(box.x), cvRound(box.y) - 3),
                           cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
             strip_box = strip_box ? (*strip_box | box) : box;
@@ -552,7 +480,7 @@ int main(int argc, char** argv) {
         const kw::tracking::PersonAnswer* first = a.people.empty() ? nullptr : &a.people.front();
         cv::putText(picture,
                     cv::format("frame %d  %s", source_index.at(a.input), kw::tracking::stateName(a.state)) +
-                        (max_people > 1 ? cv::format("  %d people", people_now)
+                        (session_options.max_people > 1 ? cv::format("  %d people", people_now)
                          : first && first->estimate ? cv::format("  N_eff %.0f  %.1f km/h", first->estimate->effective_sample_size,
                                                                  first->estimate->speed_kmh)
                                                     : std::string()),
@@ -653,8 +581,8 @@ int main(int argc, char** argv) {
     std::printf("frames=%d tracked_frames=%d skipped_frames=%d lost_frames_reported=%d restarts=%d resampled_frames=%d "
                 "particles=%d\n",
                 answered, tracked, skipped, lost, std::max(0, starts - static_cast<int>(bodies_used.size())), resampled,
-                options.num_particles);
-    if (max_people > 1)
+                options.filter.num_particles);
+    if (session_options.max_people > 1)
       std::printf("tracks_started=%d bodies_used=%zu most_people_at_once=%d\n", starts, bodies_used.size(), most_people);
     std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(total_ms),
                 median(precompute_ms), median(particles_ms));

@@ -84,9 +84,8 @@ int main(int argc, char** argv) {
     const int cores = kw::common::resolveThreads(0);
     for (int threads : {1, cores}) {
       kw::tracking::TrackerOptions options;
-      options.num_particles = particles;
-      options.resample_ess_threshold = particles / 10.0;
-      options.num_threads = threads;
+      options.filter.num_particles = particles;
+      options.filter.num_threads = threads;
       kw::tracking::Tracker tracker(camera, walk.ground, table, prior, options);
       tracker.setBackground(background);
       std::vector<double> total, precompute, dynamics, likelihood, resample, per_particle, dynamics_per_particle;

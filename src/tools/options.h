@@ -8,6 +8,10 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <type_traits>
+#include <variant>
+
+#include "kneed_walker/core/common/option_table.h"
 
 namespace kneed_walker::tools {
 
@@ -30,6 +34,24 @@ inline CLI::Validator FiniteRange(double min, double max) {
         return std::string();
       },
       "FINITE in " + range.str());
+}
+
+// Every option of a table as a command-line option: the table's snake_case name in kebab-case
+// (num_particles: --num-particles), its help and unit, its default shown, numbers checked against
+// its range, flags given as true or false (--use-optical-flow false).
+template <class Options>
+void addTableOptions(CLI::App& app, const core::common::OptionTable<Options>& table, Options& options) {
+  for (const core::common::OptionSpec<Options>& spec : table) {
+    std::string help = spec.help;
+    if (*spec.unit) help += std::string(", ") + spec.unit;
+    std::visit(
+        [&](auto* value) {
+          CLI::Option* option =
+              app.add_option("--" + core::common::kebabCase(spec.name), *value, help)->capture_default_str();
+          if constexpr (!std::is_same_v<decltype(value), bool*>) option->check(FiniteRange(spec.min, spec.max));
+        },
+        spec.field(options));
+  }
 }
 
 }  // namespace kneed_walker::tools

@@ -164,8 +164,8 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   // first frames, the person found in the image, each frame's filtered estimate).
   const std::string csv = "/tmp/kneed_walker_tracking_online_" + std::to_string(getpid()) + ".csv";
   const std::string command = std::string(KNEED_WALKER_TRACK_OFFLINE) + " --bag " + sequence + ".bag --camera " +
-                              sequence + "_camera.yml --background-from-start --background-samples 20 --filtered" +
-                              " --particles " + std::to_string(particles) + " --seed 1 --out-csv " + csv + " 2>&1";
+                              sequence + "_camera.yml --background-from-start --background-frames 20 --filtered" +
+                              " --num-particles " + std::to_string(particles) + " --seed 1 --out-csv " + csv + " 2>&1";
   ASSERT_EQ(std::system((command + " > /dev/null").c_str()), 0) << command;
   const std::vector<JointRow> offline = readJoints(csv);
   std::remove(csv.c_str());

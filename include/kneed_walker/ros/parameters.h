@@ -1,6 +1,8 @@
 // Loading the tracker nodelet's private parameters into the core's options, in one place.
 //
-// Every parameter is documented in config/tracker.yaml and the README's "ROS API" section.
+// Every parameter is read by its name in an option table (the core's TrackerOptions,
+// LikelihoodOptions and SessionOptions, and RosInterfaceOptions here), whose default is the
+// struct's; config/tracker.yaml documents them all (a test checks that it agrees with the tables).
 // A parameter of the wrong type, out of range, or not known at all (a typo) makes
 // loadTrackerNodeConfig throw std::invalid_argument naming each offending parameter, so
 // the nodelet refuses to start rather than run with a value nobody asked for.
@@ -33,8 +35,10 @@ struct RosInterfaceOptions {
   std::vector<double> init_box;        // the person's box in the first tracked frame, x1 y1 x2 y2, px (empty: find them)
   // The model's files; empty: the package's config/.
   std::string gait_table, prior_config, walker_model;
-  double prior_noise_scale = 1.0;      // factor on the prior's torque noise scales s_j (eq. 11), [0, 100]
+  double prior_noise_scale = 1.0;      // factor on the prior's torque noise scales s_j (eq. 11)
 };
+// Its numbers and flags: name, range, unit, help (core/common/option_table.h).
+const core::common::OptionTable<RosInterfaceOptions>& rosInterfaceOptionTable();
 
 struct TrackerNodeConfig {
   core::tracking::TrackerOptions tracker;
@@ -42,6 +46,10 @@ struct TrackerNodeConfig {
   core::tracking::SessionOptions session;
   RosInterfaceOptions ros;
 };
+
+// The documentation of every parameter read from an option table, as a Markdown table
+// (parameter, default, unit, range, meaning): the README's, checked by a test.
+std::string parameterTableMarkdown();
 
 // Reads all parameters under private_nh's namespace. Throws std::invalid_argument listing
 // every problem (one per line) when any is found.

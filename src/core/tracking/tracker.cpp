@@ -43,8 +43,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   prior::requirePriorTable(table, prior_options);
   // The gaits the particles start on: the table's feasible gaits, as fast and long-stepped as
   // the options ask at least, scaled to the person by Froude similarity, at the slope nearest
-  // the ground's that has any and at every slope between it and the level (TrackerOptions::
-  // hill_gaits). The prior's table has no gait uphill beyond 4.3°: on a steeper climb the
+  // the ground's that has any and at every slope between it and the level. The prior's table has no gait uphill beyond 4.3°: on a steeper climb the
   // particles walk the 4.3° gaits and those between; their bodies are turned onto the ground's
   // slope (BodyPrior).
   const gait::GaitGrid& grid = table.grid;
@@ -70,7 +69,7 @@ Tracker::Tracker(const vision::Camera& camera, const vision::GroundPlane& ground
   for (const int s : with_gaits) {
     const double slope = grid.slopes_rad[s];
     const bool between = std::min(0.0, grid.slopes_rad[nearest]) <= slope && slope <= std::max(0.0, grid.slopes_rad[nearest]);
-    if (s == nearest || (options.hill_gaits == HillGaits::kLevelToNearest && between)) bank_slopes.push_back(s);
+    if (s == nearest || between) bank_slopes.push_back(s);
   }
   const dynamics::WalkerSimulator simulator(dynamics::dimensionlessWalker(table.body));
   const double leg_m = table.body.leg_length_per_height * options.person_height_m;
@@ -241,7 +240,7 @@ void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
   const double mid_speed = 0.5 * (guess.min_speed_kmh + guess.max_speed_kmh);
   for (int g = 1; g < gaitCount(); ++g)
     if (std::abs(bank_[g].speed_kmh - mid_speed) < std::abs(bank_[middle].speed_kmh - mid_speed)) middle = g;
-  common::Random random(mixSeed(options_.seed, 0, 7, 0));
+  common::Random random(mixSeed(options_.filter.seed, 0, 7, 0));
   body::BodyPose pose;
   TrackerParticle particle;
   particle.body = bank_[middle].prior->sample(0.25, guess.position_m, guess.heading_rad, random, pose);
@@ -295,16 +294,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
     throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
   const auto started_at = Clock::now();
   if (!guess.same_person || appearance_.empty()) learnAppearance(bgr, guess);
-  FilterOptions filter_options;
-  filter_options.num_particles = options_.num_particles;
-  filter_options.resample_ess_threshold = options_.resample_ess_threshold;
-  filter_options.resample_lag_frames = options_.resample_lag_frames;
-  filter_options.resample_mixing = options_.resample_mixing;
-  filter_options.num_threads = options_.num_threads;
-  filter_options.seed = options_.seed;
-  filter_options.keep_paths = options_.keep_whole_path;
-  filter_options.initial_oversampling = options_.initial_oversampling;
-  filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(filter_options);
+  filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(options_.filter);
   frame_ = 0;
   stamp_s_ = stamp_s;
   loss_ = TrackLossDetector(options_.lost_likelihood_fraction);
@@ -391,7 +381,7 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   evidence_.push_back(std::move(evidence));
   evidence_frames_.push_back(frame_);
   evidence_dt_s_.push_back(dt_s_);
-  while (static_cast<int>(evidence_.size()) > options_.resample_lag_frames + 1) {
+  while (static_cast<int>(evidence_.size()) > options_.filter.resample_lag_frames + 1) {
     evidence_.erase(evidence_.begin());
     evidence_frames_.erase(evidence_frames_.begin());
     evidence_dt_s_.erase(evidence_dt_s_.begin());

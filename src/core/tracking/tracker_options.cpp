@@ -1,76 +1,73 @@
 #include "kneed_walker/core/tracking/tracker_options.h"
 
-#include <cmath>
 #include <sstream>
 
 namespace kneed_walker::core::tracking {
-namespace {
 
-// Appends "name = value is outside [lo, hi] (meaning)" when value is not inside the range.
-template <typename T>
-void checkRange(std::vector<std::string>& problems, const char* name, T value, T lo, T hi,
-                const char* meaning) {
-  const bool finite = std::isfinite(static_cast<double>(value));
-  if (finite && value >= lo && value <= hi) return;
-  std::ostringstream message;
-  message << name << " = " << value << " is outside [" << lo << ", " << hi << "] ("
-          << meaning << ")";
-  problems.push_back(message.str());
+using common::OptionField;
+
+const common::OptionTable<TrackerOptions>& trackerOptionTable() {
+  using O = TrackerOptions;
+  static const common::OptionTable<TrackerOptions> table{
+      {"num_particles", [](O& o) -> OptionField { return &o.filter.num_particles; }, 1, 1e6, "",
+       "particles per person (the paper: 5000)"},
+      {"resample_ess_fraction", [](O& o) -> OptionField { return &o.filter.resample_ess_fraction; }, 1e-6, 1, "",
+       "resample when the effective sample size falls below this fraction of the particles (the paper: 0.1)"},
+      {"resample_lag_frames", [](O& o) -> OptionField { return &o.filter.resample_lag_frames; }, 0, 30, "frames",
+       "Δs: resample from time t − Δs (paper §4)"},
+      {"resample_mixing", [](O& o) -> OptionField { return &o.filter.resample_mixing; }, 0, 1, "",
+       "γ: weight of the time-t weights in the resampling mixture (paper §4)"},
+      {"initial_oversampling", [](O& o) -> OptionField { return &o.filter.initial_oversampling; }, 1, 1000, "",
+       "a track's first frame weighs this many times num_particles candidates and keeps num_particles"},
+      {"num_threads", [](O& o) -> OptionField { return &o.filter.num_threads; }, 0, 256, "",
+       "worker threads for the per-particle work; 0: all cores"},
+      {"seed", [](O& o) -> OptionField { return &o.filter.seed; }, 0, 1.8446744073709552e19, "",
+       "random seed: the same input and seed give the same output"},
+      {"person_height_m", [](O& o) -> OptionField { return &o.person_height_m; }, 1.0, 2.3, "m",
+       "the person's standing height"},
+      {"person_mass_kg", [](O& o) -> OptionField { return &o.person_mass_kg; }, 20, 250, "kg", "the person's mass"},
+      {"person_breadth_scale", [](O& o) -> OptionField { return &o.person_breadth_scale; }, 0.5, 3, "",
+       "the projected torso and thighs this many times as broad as the body model's (a coat, arms)"},
+      {"ground_slope_rad", [](O& o) -> OptionField { return &o.ground_slope_rad; }, -0.2, 0.2, "rad",
+       "ground slope along the walk, positive uphill (a camera file's ground plane overrides it)"},
+      {"min_gait_speed_kmh", [](O& o) -> OptionField { return &o.min_gait_speed_kmh; }, 0, 20, "km/h",
+       "the slowest of the gait table's gaits the particles may walk (1.5 with min_gait_step_m 0.3: strolling)"},
+      {"min_gait_step_m", [](O& o) -> OptionField { return &o.min_gait_step_m; }, 0, 3, "m",
+       "the shortest step of the gait table's gaits the particles may walk"},
+      {"gait_speed_sd_kmh", [](O& o) -> OptionField { return &o.gait_speed_sd_kmh; }, 0, 5, "km/h",
+       "speed changes: a particle's target speed steps by N(0, this²) at each heel strike"},
+      {"gait_step_sd_m", [](O& o) -> OptionField { return &o.gait_step_sd_m; }, 0, 0.5, "m",
+       "step changes: a particle's target step length steps by N(0, this²) at each heel strike"},
+      {"gait_change_persistence", [](O& o) -> OptionField { return &o.gait_change_persistence; }, 0, 0.95, "",
+       "this fraction of a target's last step is carried into its next (0.8 for people who keep slowing)"},
+      {"gait_slope_change_probability", [](O& o) -> OptionField { return &o.gait_slope_change_probability; }, 0, 1,
+       "", "on a hill: the chance per heel strike that a particle's gait moves to a neighbouring slope's"},
+      {"lost_likelihood_fraction", [](O& o) -> OptionField { return &o.lost_likelihood_fraction; }, 0, 1, "",
+       "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its recent "
+       "median (0: below 0)"},
+      {"default_frame_interval_s", [](O& o) -> OptionField { return &o.default_frame_interval_s; }, 1e-4, 1, "s",
+       "the frame interval when stamps are unusable"},
+      {"max_frame_gap_s", [](O& o) -> OptionField { return &o.max_frame_gap_s; }, 1e-4, 60, "s",
+       "a larger gap between stamps starts the track again"},
+  };
+  return table;
 }
 
-}  // namespace
-
 std::vector<std::string> validate(const TrackerOptions& o) {
-  std::vector<std::string> problems;
-  checkRange(problems, "num_particles", o.num_particles, 1, 1000000, "particle count");
-  if (o.num_particles >= 1)  // a bad particle count is reported by itself, not as this range's end
-    checkRange(problems, "resample_ess_threshold", o.resample_ess_threshold, 1e-9,
-               static_cast<double>(o.num_particles),
-               "effective sample size below which to resample; at most num_particles: lower it, or leave it "
-               "out for num_particles / 10");
-  checkRange(problems, "resample_lag_frames", o.resample_lag_frames, 0, 30,
-             "frames back to resample from (paper's Δs)");
-  checkRange(problems, "resample_mixing", o.resample_mixing, 0.0, 1.0,
-             "weight of the current-time weights in the resampling proposal, the paper's gamma");
-  checkRange(problems, "initial_oversampling", o.initial_oversampling, 1, 1000,
-             "candidates per particle drawn and weighed at a track's first frame");
+  std::vector<std::string> problems = common::rangeProblems(o, trackerOptionTable());
   // The candidates are held at once: their number is bounded too.
-  if (o.num_particles >= 1 && o.initial_oversampling >= 1 &&
-      static_cast<long long>(o.num_particles) * o.initial_oversampling > kMaxInitialCandidates) {
+  const FilterOptions& f = o.filter;
+  if (f.num_particles >= 1 && f.initial_oversampling >= 1 &&
+      static_cast<long long>(f.num_particles) * f.initial_oversampling > kMaxInitialCandidates) {
     std::ostringstream message;
-    message << "initial_oversampling = " << o.initial_oversampling << " times num_particles = " << o.num_particles
-            << " is " << static_cast<long long>(o.num_particles) * o.initial_oversampling
+    message << "initial_oversampling = " << f.initial_oversampling << " times num_particles = " << f.num_particles
+            << " is " << static_cast<long long>(f.num_particles) * f.initial_oversampling
             << " candidates at a track's first frame, above " << kMaxInitialCandidates << ": lower either";
     problems.push_back(message.str());
   }
-  checkRange(problems, "num_threads", o.num_threads, 0, 256, "worker threads; 0 = all cores");
-  checkRange(problems, "person_height_m", o.person_height_m, 1.0, 2.3, "standing height, m");
-  checkRange(problems, "person_mass_kg", o.person_mass_kg, 20.0, 250.0, "body mass, kg");
-  checkRange(problems, "ground_slope_rad", o.ground_slope_rad, -0.2, 0.2,
-             "ground slope, rad, positive uphill");
-  checkRange(problems, "min_gait_speed_kmh", o.min_gait_speed_kmh, 0.0, 20.0,
-             "slowest gait of the table the particles may walk, km/h");
-  checkRange(problems, "gait_speed_sd_kmh", o.gait_speed_sd_kmh, 0.0, 5.0,
-             "spread of a particle's target speed's step at a heel strike, km/h");
-  checkRange(problems, "gait_step_sd_m", o.gait_step_sd_m, 0.0, 0.5,
-             "spread of a particle's target step length's step at a heel strike, m");
-  checkRange(problems, "gait_change_persistence", o.gait_change_persistence, 0.0, 0.95,
-             "fraction of a target's last step carried into its next at a heel strike");
-  checkRange(problems, "gait_slope_change_probability", o.gait_slope_change_probability, 0.0, 1.0,
-             "chance per heel strike that a particle's gait moves to a neighbouring slope's on a hill");
-  if (o.hill_gaits != HillGaits::kNearest && o.hill_gaits != HillGaits::kLevelToNearest)
-    problems.push_back("hill_gaits = " + std::to_string(static_cast<int>(o.hill_gaits)) +
-                       " is not a HillGaits value (nearest or level_to_nearest)");
-  checkRange(problems, "person_breadth_scale", o.person_breadth_scale, 0.5, 3.0,
-             "factor on the torso's and thighs' breadth");
-  checkRange(problems, "lost_likelihood_fraction", o.lost_likelihood_fraction, 0.0, 1.0,
-             "fraction of the recent median log-likelihood ratio below which frames count towards a lost track");
-  checkRange(problems, "min_gait_step_m", o.min_gait_step_m, 0.0, 3.0,
-             "shortest step of the table's gaits the particles may walk, m");
-  checkRange(problems, "default_frame_interval_s", o.default_frame_interval_s, 1e-4, 1.0,
-             "frame interval used when stamps are unusable, s");
-  checkRange(problems, "max_frame_gap_s", o.max_frame_gap_s, o.default_frame_interval_s, 60.0,
-             "stamp gap that reinitialises the tracker, s; at least default_frame_interval_s");
+  if (o.max_frame_gap_s < o.default_frame_interval_s)
+    problems.push_back("max_frame_gap_s = " + std::to_string(o.max_frame_gap_s) +
+                       " is below default_frame_interval_s = " + std::to_string(o.default_frame_interval_s));
   return problems;
 }
 

@@ -10,12 +10,35 @@
 
 namespace kneed_walker::core::tracking {
 
+const common::OptionTable<SessionOptions>& sessionOptionTable() {
+  using common::OptionField;
+  using O = SessionOptions;
+  static const common::OptionTable<SessionOptions> table{
+      {"background_frames", [](O& o) -> OptionField { return &o.background_frames; }, 1, 500, "frames",
+       "frames held at the start to learn the background from (then tracked)"},
+      {"find_people", [](O& o) -> OptionField { return &o.find_people; }, 0, 0, "",
+       "find walking people in the image when no box or guess is given"},
+      {"heading_frames", [](O& o) -> OptionField { return &o.heading_frames; }, 1, 50, "frames",
+       "a found person's walking direction from their blob this many frames on"},
+      {"min_start_speed_kmh", [](O& o) -> OptionField { return &o.min_start_speed_kmh; }, 0, 20, "km/h",
+       "a new track starts on the gaits from this speed"},
+      {"max_start_speed_kmh", [](O& o) -> OptionField { return &o.max_start_speed_kmh; }, 0, 20, "km/h",
+       "... to this speed"},
+      {"max_people", [](O& o) -> OptionField { return &o.max_people; }, 1, 16, "",
+       "people tracked at once, each with its own particles (body ids 1..max_people)"},
+      {"merge_distance_m", [](O& o) -> OptionField { return &o.merge_distance_m; }, 0, 5, "m",
+       "two tracks whose waists come this near follow one person: the newer ends"},
+      {"reacquire_distance_m", [](O& o) -> OptionField { return &o.reacquire_distance_m; }, 0, 5, "m",
+       "a lost track starts again at the next frame from a person found this near (0: never)"},
+  };
+  return table;
+}
+
 std::vector<std::string> validate(const SessionOptions& o) {
-  std::vector<std::string> problems;
-  if (!(o.background_frames >= 1 && o.background_frames <= 500))
-    problems.push_back("background_frames = " + std::to_string(o.background_frames) + " is outside [1, 500]");
-  if (!(o.heading_frames >= 1 && o.heading_frames <= 50))
-    problems.push_back("heading_frames = " + std::to_string(o.heading_frames) + " is outside [1, 50]");
+  std::vector<std::string> problems = common::rangeProblems(o, sessionOptionTable());
+  if (o.min_start_speed_kmh > o.max_start_speed_kmh)
+    problems.push_back("min_start_speed_kmh = " + std::to_string(o.min_start_speed_kmh) +
+                       " is above max_start_speed_kmh = " + std::to_string(o.max_start_speed_kmh));
   if (!(std::isfinite(o.min_walk_m) && o.min_walk_m >= 0 && o.min_walk_m <= 5))
     problems.push_back("min_walk_m = " + std::to_string(o.min_walk_m) + " is outside [0, 5]");
   const vision::PersonDetectorOptions& d = o.detector;
@@ -25,21 +48,8 @@ std::vector<std::string> validate(const SessionOptions& o) {
   if (!(std::isfinite(d.min_height_m) && std::isfinite(d.max_height_m) && 0 < d.min_height_m &&
         d.min_height_m < d.max_height_m))
     problems.push_back("detector.min_height_m and max_height_m must be finite with 0 < min < max");
-  if (!(std::isfinite(o.min_start_speed_kmh) && std::isfinite(o.max_start_speed_kmh) && 0 <= o.min_start_speed_kmh &&
-        o.min_start_speed_kmh <= o.max_start_speed_kmh && o.max_start_speed_kmh <= 20))
-    problems.push_back("min_start_speed_kmh and max_start_speed_kmh must be finite with 0 <= min <= max <= 20 (are " +
-                       std::to_string(o.min_start_speed_kmh) + " and " + std::to_string(o.max_start_speed_kmh) + ")");
   if (!(std::isfinite(d.min_fill) && d.min_fill >= 0 && d.min_fill <= 1))
     problems.push_back("detector.min_fill must be in [0, 1]");
-  if (!(o.max_people >= 1 && o.max_people <= 16))
-    problems.push_back("max_people = " + std::to_string(o.max_people) + " is outside [1, 16]");
-  if (!(std::isfinite(o.merge_distance_m) && o.merge_distance_m >= 0 && o.merge_distance_m <= 5))
-    problems.push_back("merge_distance_m = " + std::to_string(o.merge_distance_m) + " is outside [0, 5]");
-  if (!(std::isfinite(o.min_person_height_m) && std::isfinite(o.max_person_height_m) && 1 <= o.min_person_height_m &&
-        o.min_person_height_m <= o.max_person_height_m && o.max_person_height_m <= 2.3))
-    problems.push_back("min_person_height_m and max_person_height_m must be finite with 1 <= min <= max <= 2.3");
-  if (!(std::isfinite(o.reacquire_distance_m) && o.reacquire_distance_m >= 0 && o.reacquire_distance_m <= 5))
-    problems.push_back("reacquire_distance_m = " + std::to_string(o.reacquire_distance_m) + " is outside [0, 5]");
   return problems;
 }
 
@@ -49,7 +59,7 @@ TrackerFactory trackerFactory(const vision::Camera& camera, const vision::Ground
   return [=](int body, std::optional<double> person_height_m) {
     TrackerOptions own = options;
     if (person_height_m) own.person_height_m = *person_height_m;
-    if (body > 1) own.seed = mixSeed(options.seed, 0, 1000 + static_cast<std::uint64_t>(body), 0);
+    if (body > 1) own.filter.seed = mixSeed(options.filter.seed, 0, 1000 + static_cast<std::uint64_t>(body), 0);
     return std::make_unique<Tracker>(camera, ground, prior_table, prior, own, likelihood);
   };
 }
@@ -270,7 +280,7 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
           if (d < best) best = d, nearest = it;
         }
         if (nearest == found.end()) continue;
-        slots_[s].reacquire = foundPersonGuess(nearest->ground_xy_m, lost.heading_rad, 0.6, nearest->height_m);
+        slots_[s].reacquire = foundPersonGuess(nearest->ground_xy_m, lost.heading_rad, 0.6);
         slots_[s].reacquire->same_person = true;
         found.erase(nearest);
         char text[96];
@@ -336,13 +346,11 @@ std::vector<MapFrame> TrackingSession::endTrack(Slot& slot) {
 }
 
 InitialGuess TrackingSession::foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad,
-                                              double heading_sd_rad, double blob_height_m) const {
+                                              double heading_sd_rad) const {
   InitialGuess guess;
   guess.position_m = position_m;
   guess.heading_rad = heading_rad;
   guess.heading_sd_rad = heading_sd_rad;
-  if (options_.estimate_person_height)
-    guess.person_height_m = std::clamp(blob_height_m, options_.min_person_height_m, options_.max_person_height_m);
   guess.min_speed_kmh = options_.min_start_speed_kmh;
   guess.max_speed_kmh = options_.max_start_speed_kmh;
   return guess;
@@ -393,8 +401,7 @@ std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<visi
     if (!before) continue;
     const Eigen::Vector2d walked = current->person.ground_xy_m - before->person.ground_xy_m;
     if (walked.norm() < options_.min_walk_m) continue;
-    guesses.push_back(foundPersonGuess(current->person.ground_xy_m, std::atan2(walked.y(), walked.x()), 0.5,
-                                       0.5 * (current->person.height_m + before->person.height_m)));
+    guesses.push_back(foundPersonGuess(current->person.ground_xy_m, std::atan2(walked.y(), walked.x()), 0.5));
   }
   return guesses;
 }

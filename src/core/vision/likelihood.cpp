@@ -11,6 +11,26 @@
 
 namespace kneed_walker::core::vision {
 
+const common::OptionTable<LikelihoodOptions>& likelihoodOptionTable() {
+  using common::OptionField;
+  using O = LikelihoodOptions;
+  static const common::OptionTable<LikelihoodOptions> table{
+      {"use_optical_flow", [](O& o) -> OptionField { return &o.use_flow; }, 0, 0, "",
+       "the likelihood's optical flow term (paper eq. 13); false for footage of a few frames a second"},
+      {"appearance_weight", [](O& o) -> OptionField { return &o.appearance_weight; }, 0, 100, "",
+       "weight of each part's average appearance log ratio"},
+      {"flow_weight", [](O& o) -> OptionField { return &o.flow_weight; }, 0, 100, "",
+       "weight of each part's average flow log ratio"},
+      {"flow_min_sd_px", [](O& o) -> OptionField { return &o.flow.min_sd_px; }, 0.01, 100, "px",
+       "floor of the optical flow's standard deviation"},
+  };
+  return table;
+}
+
+std::vector<std::string> validate(const LikelihoodOptions& options) {
+  return common::rangeProblems(options, likelihoodOptionTable());
+}
+
 void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, const cv::Rect& roi,
                             const BackgroundModel& background, const AppearanceModel& appearance,
                             const LikelihoodOptions& options) {
@@ -322,43 +342,7 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     outside[p] = appearance.outside;
     flow_count[p] = points;
   }
-  // Ground contact: the rows below each foot, as many as the foot's outline has, over its
-  // columns and less any part's pixels there, should be background; their average foot log
-  // ratio counts against the body (its negative for the body). A body too far away along the
-  // camera's line of sight stands inside the person's silhouette, its feet on the person's
-  // shins, where the parts' own averages lose little.
-  std::array<double, 2> contact{};
-  std::array<bool, 2> has_contact{};
-  if (options.contact_weight > 0) {
-    std::array<const RowSpans*, kParts> body_spans;
-    int n_body = 0;
-    for (int p = 0; p < kParts; ++p)
-      if (spans[p].rows > 0) body_spans[n_body++] = &spans[p];
-    for (int side = 0; side < 2; ++side) {
-      const RowSpans& foot = spans[side == 0 ? body::kLeftFootPart : body::kRightFootPart];
-      int left = std::numeric_limits<int>::max(), right = std::numeric_limits<int>::min();
-      for (int k = 0; k < foot.rows; ++k) {
-        if (foot.left[k] >= foot.right[k]) continue;
-        left = std::min(left, foot.left[k]);
-        right = std::max(right, foot.right[k]);
-      }
-      if (left >= right) continue;
-      PixelTally below;
-      const int first = foot.first_row + foot.rows;
-      for (int y = first; y < first + std::max(2, foot.rows); ++y) {
-        pieces[0] = Interval{left, right};
-        const int n_pieces = subtractCovers(pieces, 1, y, body_spans, n_body, next);
-        const bool row_inside = y >= roi.y && y < roi_bottom;
-        for (int i = 0; i < n_pieces; ++i) below.add(evidence, kFootKind, y, row_inside, pieces[i]);
-      }
-      if (below.pixels() < options.min_part_pixels) continue;
-      contact[side] = (below.sum + options.outside_ratio * below.outside) / below.pixels();
-      has_contact[side] = true;
-    }
-  }
   double total = 0;
-  for (int side = 0; side < 2; ++side)
-    if (has_contact[side]) total -= options.contact_weight * contact[side];
   for (int p = 0; p < kParts; ++p) {
     const int pixels = inside[p] + outside[p];
     PartScore score;
@@ -372,7 +356,6 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
       score.flow = flow_sum[p] / flow_count[p];
       total += options.flow_weight * score.flow;
     }
-    if (p == body::kLeftFootPart || p == body::kRightFootPart) score.contact = contact[p == body::kLeftFootPart ? 0 : 1];
     if (scores) (*scores)[p] = score;
   }
   return total;

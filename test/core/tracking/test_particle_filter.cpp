@@ -99,8 +99,9 @@ FilterRun run(const LinearGaussian& model, FilterOptions options) {
 FilterRun checkedAgainstKalman(unsigned model_seed, double ess_threshold, int lag) {
   const LinearGaussian model(40, model_seed);
   FilterOptions options;
+  options.initial_oversampling = 1;  // the N drawn are the first particles
   options.num_particles = 20000;
-  options.resample_ess_threshold = ess_threshold;
+  options.resample_ess_fraction = ess_threshold / options.num_particles;
   options.resample_lag_frames = lag;
   options.resample_mixing = 0.95;
   const FilterRun r = run(model, options);
@@ -124,8 +125,9 @@ TEST(ParticleFilter, MatchesTheKalmanPosteriorWithPlainResampling) {
 TEST(ParticleFilter, SameSeedSameParticlesOnAnyNumberOfThreads) {
   const LinearGaussian model(15, 9);
   FilterOptions options;
+  options.initial_oversampling = 1;  // the N drawn are the first particles
   options.num_particles = 1000;
-  options.resample_ess_threshold = 500;
+  options.resample_ess_fraction = 0.5;
   options.num_threads = 1;
   const FilterRun one = run(model, options);
   options.num_threads = 2;
@@ -154,8 +156,9 @@ int runHistoryFilter(ParticleFilter<History>& filter, int frames) {
 }
 FilterOptions historyOptions(bool keep_paths) {
   FilterOptions options;
+  options.initial_oversampling = 1;  // the N drawn are the first particles
   options.num_particles = 200;
-  options.resample_ess_threshold = 150;
+  options.resample_ess_fraction = 0.75;
   options.resample_lag_frames = 3;
   options.keep_paths = keep_paths;
   return options;
@@ -229,7 +232,7 @@ TEST(ParticleFilter, InitialOversamplingSamplesASharpFirstPosteriorFromABroadGue
   auto initialized = [&](int oversampling, int threads) {
     FilterOptions options;
     options.num_particles = 200;
-    options.resample_ess_threshold = 20;
+    options.resample_ess_fraction = 0.1;
     options.initial_oversampling = oversampling;
     options.num_threads = threads;
     ParticleFilter<double> filter(options);
@@ -272,10 +275,11 @@ TEST(ParticleFilter, LogSumExpIsStable) {
 
 TEST(ParticleFilter, RefusesBadOptions) {
   FilterOptions options;
+  options.initial_oversampling = 1;  // the N drawn are the first particles
   options.num_particles = 100;
-  options.resample_ess_threshold = 500;
+  options.resample_ess_fraction = 5;
   EXPECT_THROW(ParticleFilter<double>{options}, std::invalid_argument);
-  options.resample_ess_threshold = 50;
+  options.resample_ess_fraction = 0.5;
   options.resample_mixing = 1.5;
   EXPECT_THROW(ParticleFilter<double>{options}, std::invalid_argument);
   options.resample_mixing = 0.95;

@@ -24,9 +24,8 @@ std::unique_ptr<Tracker> makeTracker(int particles, int threads, double mass_kg 
                                      TrackerOptions options = {}) {
   const test::RenderedWalk& s = scene();
   options.person_mass_kg = mass_kg;
-  options.num_particles = particles;
-  options.resample_ess_threshold = particles / 10.0;
-  options.num_threads = threads;
+  options.filter.num_particles = particles;
+  options.filter.num_threads = threads;
   auto tracker = std::make_unique<Tracker>(
       s.camera, s.walk.ground, gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
       prior::loadPriorOptions(test::configFile("prior.yaml")), options);
@@ -84,8 +83,8 @@ TEST(Tracker, WalksTheGaitsFromTheMinimumSpeedAndStepUp) {
 
 // The particles walk the gaits of the table's slope nearest the ground's that has gaits: the
 // prior's table reaches 10° downhill but has none uphill beyond 4.3°, so a 7° or 10° climb
-// walks the 4.3° gaits, and a 6° descent the 7.16° ones. By default (HillGaits::kLevelToNearest)
-// also those of every slope between that one and the level.
+// walks the 4.3° gaits, and a 6° descent the 7.16° ones; and those of every slope between that
+// one and the level.
 TEST(Tracker, WalksTheNearestSlopeThatHasGaitsAndThoseBetweenItAndTheLevel) {
   const double deg = M_PI / 180;
   const double d2 = 0.037524578917878082, d4 = 0.075049157835756164;  // the table's ±2.15° and ±4.3°
@@ -101,24 +100,16 @@ TEST(Tracker, WalksTheNearestSlopeThatHasGaitsAndThoseBetweenItAndTheLevel) {
     ASSERT_EQ(between->gaitSlopesRad().size(), c.level_to_nearest.size()) << c.ground_deg << "°";
     for (size_t i = 0; i < c.level_to_nearest.size(); ++i)
       EXPECT_NEAR(between->gaitSlopesRad()[i], c.level_to_nearest[i], 1e-12) << c.ground_deg << "° slope " << i;
-    options.hill_gaits = HillGaits::kNearest;
-    const auto nearest = makeTracker(10, 1, 70.0, options);
-    const double farthest_from_level = c.ground_deg >= 0 ? c.level_to_nearest.back() : c.level_to_nearest.front();
-    ASSERT_EQ(nearest->gaitSlopesRad().size(), 1u) << c.ground_deg << "°";
-    EXPECT_NEAR(nearest->gaitSlopesRad()[0], farthest_from_level, 1e-12) << c.ground_deg << "°";
-    EXPECT_LT(nearest->gaitCount(), between->gaitCount() + (c.level_to_nearest.size() == 1 ? 1 : 0)) << c.ground_deg << "°";
   }
 }
 
 // On a hill a particle's gait may move to a neighbouring slope's at its heel strikes: every
 // particle walks the gait of the slope it says it walks (its controls are that slope's), and
-// the particles spread over the bank's slopes; held on one slope (probability 0, nearest only)
-// they all walk its gaits.
+// the particles spread over the bank's slopes.
 TEST(Tracker, OnAHillTheParticlesGaitsMoveBetweenSlopesAtHeelStrikes) {
-  auto slopesWalked = [](HillGaits hill_gaits, double probability) {
+  auto slopesWalked = [](double probability) {
     TrackerOptions options;
     options.ground_slope_rad = 0.1;  // nearest with gaits: 4.3°; between it and the level: 0 and 2.15°
-    options.hill_gaits = hill_gaits;
     options.gait_slope_change_probability = probability;
     const auto tracker = makeTracker(300, 1, 70.0, options);
     const test::RenderedWalk& s = scene();
@@ -136,8 +127,7 @@ TEST(Tracker, OnAHillTheParticlesGaitsMoveBetweenSlopesAtHeelStrikes) {
     EXPECT_GT(after_a_strike, 0);
     return slopes;
   };
-  EXPECT_EQ(slopesWalked(HillGaits::kNearest, 0.0), std::set<int>{0});
-  EXPECT_EQ(slopesWalked(HillGaits::kLevelToNearest, 1.0), (std::set<int>{0, 1, 2}));
+  EXPECT_EQ(slopesWalked(1.0), (std::set<int>{0, 1, 2}));
 }
 
 // person_breadth_scale broadens the projected torso and thighs (width and depth), nothing else.
@@ -356,8 +346,7 @@ TEST(Tracker, TheWalkersSpringsAreInSiForThePerson) {
 TEST(Tracker, RefusesToStartWithoutABackgroundOrOnAWrongFrame) {
   const test::RenderedWalk& s = scene();
   TrackerOptions options;
-  options.num_particles = 50;
-  options.resample_ess_threshold = 5;
+  options.filter.num_particles = 50;
   Tracker tracker(s.camera, s.walk.ground,
                   gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
                   prior::loadPriorOptions(test::configFile("prior.yaml")), options);
@@ -365,7 +354,7 @@ TEST(Tracker, RefusesToStartWithoutABackgroundOrOnAWrongFrame) {
   tracker.setBackground(vision::BackgroundModel::learn(s.empty));
   EXPECT_THROW(tracker.start(cv::Mat(10, 10, CV_8UC3), 0.0, coarseStart()), std::invalid_argument);
   EXPECT_THROW(tracker.track(s.frames[1], 0.1), std::logic_error);
-  options.num_particles = 0;
+  options.filter.num_particles = 0;
   EXPECT_THROW(Tracker(s.camera, s.walk.ground,
                        gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
                        prior::loadPriorOptions(test::configFile("prior.yaml")), options),

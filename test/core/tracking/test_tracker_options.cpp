@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <set>
+#include <string>
 
 namespace kneed_walker::core::tracking {
 namespace {
@@ -10,10 +12,10 @@ namespace {
 TEST(TrackerOptions, DefaultsAreThePapersAndValid) {
   const TrackerOptions options;
   EXPECT_TRUE(validate(options).empty());
-  EXPECT_EQ(options.num_particles, 5000);
-  EXPECT_DOUBLE_EQ(options.resample_ess_threshold, 500.0);
-  EXPECT_EQ(options.resample_lag_frames, 3);
-  EXPECT_DOUBLE_EQ(options.resample_mixing, 0.95);
+  EXPECT_EQ(options.filter.num_particles, 5000);
+  EXPECT_DOUBLE_EQ(options.filter.resample_ess_fraction * options.filter.num_particles, 500.0);
+  EXPECT_EQ(options.filter.resample_lag_frames, 3);
+  EXPECT_DOUBLE_EQ(options.filter.resample_mixing, 0.95);
 }
 
 // True when one of the problems mentions `text`.
@@ -25,8 +27,8 @@ bool mentions(const std::vector<std::string>& problems, const std::string& text)
 
 TEST(TrackerOptions, EachProblemNamesItsField) {
   TrackerOptions options;
-  options.num_threads = -2;
-  options.resample_mixing = 1.5;
+  options.filter.num_threads = -2;
+  options.filter.resample_mixing = 1.5;
   options.person_height_m = std::numeric_limits<double>::quiet_NaN();
   options.min_gait_speed_kmh = std::numeric_limits<double>::infinity();
   options.min_gait_step_m = -0.1;
@@ -35,11 +37,10 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   options.gait_step_sd_m = -0.01;
   options.gait_change_persistence = 1.0;
   options.lost_likelihood_fraction = std::numeric_limits<double>::infinity();
-  options.initial_oversampling = 0;
+  options.filter.initial_oversampling = 0;
   options.gait_slope_change_probability = std::numeric_limits<double>::quiet_NaN();
-  options.hill_gaits = static_cast<HillGaits>(7);
   const auto problems = validate(options);
-  EXPECT_EQ(problems.size(), 13u);
+  EXPECT_EQ(problems.size(), 12u);
   EXPECT_TRUE(mentions(problems, "num_threads = -2 is outside [0, 256]"));
   EXPECT_TRUE(mentions(problems, "resample_mixing = 1.5"));
   EXPECT_TRUE(mentions(problems, "person_height_m = nan"));
@@ -52,27 +53,42 @@ TEST(TrackerOptions, EachProblemNamesItsField) {
   EXPECT_TRUE(mentions(problems, "lost_likelihood_fraction = inf"));
   EXPECT_TRUE(mentions(problems, "initial_oversampling = 0 is outside [1, 1000]"));
   EXPECT_TRUE(mentions(problems, "gait_slope_change_probability = nan is outside [0, 1]"));
-  EXPECT_TRUE(mentions(problems, "hill_gaits = 7 is not a HillGaits value"));
 }
 
-TEST(TrackerOptions, ThresholdMayNotExceedParticleCount) {
+TEST(TrackerOptions, TheResamplingThresholdIsAFractionOfTheParticles) {
   TrackerOptions options;
-  options.num_particles = 100;
-  options.resample_ess_threshold = 500;
+  options.filter.resample_ess_fraction = 5;
   const auto problems = validate(options);
   EXPECT_EQ(problems.size(), 1u);
-  EXPECT_TRUE(mentions(problems, "resample_ess_threshold = 500"));
+  EXPECT_TRUE(mentions(problems, "resample_ess_fraction = 5 is outside [1e-06, 1]"));
+}
+
+// The option table is the one definition of every option: each names a member of its own,
+// in snake_case, and holds its default in its range.
+TEST(TrackerOptions, TheTableNamesEveryOptionOnceWithItsDefaultInRange) {
+  TrackerOptions defaults;
+  std::set<std::string> names;
+  std::set<const void*> fields;
+  for (const auto& spec : trackerOptionTable()) {
+    EXPECT_TRUE(names.insert(spec.name).second) << spec.name;
+    EXPECT_TRUE(fields.insert(std::visit([](auto* p) -> const void* { return p; }, spec.field(defaults))).second)
+        << spec.name;
+    EXPECT_EQ(std::string(spec.name).find_first_not_of("abcdefghijklmnopqrstuvwxyz_0123456789"), std::string::npos);
+    EXPECT_TRUE(common::inRange(spec.field(defaults), spec.min, spec.max)) << spec.name;
+    EXPECT_LT(spec.min, spec.max) << spec.name;
+    EXPECT_GT(std::string(spec.help).size(), 10u) << spec.name;
+  }
+  EXPECT_EQ(common::kebabCase("min_gait_speed_kmh"), "min-gait-speed-kmh");
 }
 
 TEST(TrackerOptions, InitialCandidatesAreBounded) {
   TrackerOptions options;
-  options.num_particles = 1000000;
-  options.resample_ess_threshold = 1000;
-  options.initial_oversampling = 1000;
+  options.filter.num_particles = 1000000;
+  options.filter.initial_oversampling = 1000;
   const auto problems = validate(options);
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_TRUE(mentions(problems, "initial_oversampling = 1000 times num_particles = 1000000 is 1000000000 candidates"));
-  options.initial_oversampling = 10;
+  options.filter.initial_oversampling = 10;
   EXPECT_TRUE(validate(options).empty());
 }
 

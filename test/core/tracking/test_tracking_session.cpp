@@ -23,10 +23,9 @@ const test::RenderedWalk& scene() {
 TrackerFactory makeTracker(int particles, bool keep_whole_path = false, double lost_likelihood_fraction = 0) {
   const test::RenderedWalk& s = scene();
   TrackerOptions options;
-  options.num_particles = particles;
+  options.filter.num_particles = particles;
   options.lost_likelihood_fraction = lost_likelihood_fraction;
-  options.keep_whole_path = keep_whole_path;
-  options.resample_ess_threshold = particles / 10.0;
+  options.filter.keep_paths = keep_whole_path;
   return trackerFactory(s.camera, s.walk.ground,
                         gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
                         prior::loadPriorOptions(test::configFile("prior.yaml")), options);
@@ -371,27 +370,6 @@ TEST(TrackingSession, ASecondTrackOnThePersonMergesIntoTheFirst) {
   EXPECT_EQ(session.trackCount(), 1);
 }
 
-// With estimate_person_height, a person found in the image is tracked with their blob's height
-// on the ground (the rendered person is 1.75 m tall), not the tracker's default; without, with
-// the default.
-TEST(TrackingSession, TracksAFoundPersonWithTheirBlobsHeightWhenAsked) {
-  for (const bool estimate : {false, true}) {
-    SessionOptions options = holding(10);
-    options.estimate_person_height = estimate;
-    TrackingSession session(makeTracker(100), options);
-    double height_m = 0;
-    for (const SessionAnswer& a : run(session))
-      if (a.started() && height_m == 0) height_m = session.tracker(1).personHeightM();
-    std::cout << (estimate ? "estimated" : "default") << " height " << height_m << " m\n";
-    if (estimate) {
-      EXPECT_NE(height_m, TrackerOptions{}.person_height_m);
-      EXPECT_NEAR(height_m, 1.75, 0.15);
-    } else {
-      EXPECT_EQ(height_m, TrackerOptions{}.person_height_m);
-    }
-  }
-}
-
 TEST(TrackingSession, RefusesBadOptionsNamingThem) {
   SessionOptions options;
   options.background_frames = 0;
@@ -401,18 +379,16 @@ TEST(TrackingSession, RefusesBadOptionsNamingThem) {
   options.max_people = 0;
   options.merge_distance_m = std::numeric_limits<double>::infinity();
   options.reacquire_distance_m = -1;
-  options.max_person_height_m = 3;
   try {
     TrackingSession session(makeTracker(10), options);
     FAIL() << "accepted bad options";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("background_frames"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("min_walk_m"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("min_start_speed_kmh and max_start_speed_kmh"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("min_start_speed_kmh = 5"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("max_people"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("merge_distance_m"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("reacquire_distance_m"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("max_person_height_m"), std::string::npos) << e.what();
   }
 }
 

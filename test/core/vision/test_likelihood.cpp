@@ -126,41 +126,6 @@ TEST(Likelihood, TheTruePoseScoresHigherThanPerturbedOnes) {
   }
 }
 
-// Depth along the camera's line of sight: a body farther away stands inside the person's
-// silhouette, smaller and higher in the image, its feet on the person's shins. The rows below its
-// feet are then the person's, where the truth's are the ground: the contact term tells them apart.
-TEST(Likelihood, TheGroundContactTermPenalisesABodyFartherAlongTheLineOfSight) {
-  const Scene& s = scene();
-  const FrameEvidence e = s.evidence(s.options);
-  const body::BodyPose& truth = s.walk.frames[s.frame].pose;
-  Eigen::Vector3d sight = truth.joints[body::kWaist] - s.camera.centre();
-  sight.z() = 0;
-  const body::BodyPose farther = moved(truth, 0.4 * sight.normalized());
-  auto contactAndTotal = [&](const body::BodyPose& pose, const LikelihoodOptions& o, double& contact) {
-    BodyOutlines outlines;
-    projectBodyParts(s.camera, pose, s.shape, outlines);
-    PartScores scores;
-    const double total = evaluateLikelihood(e, outlines, nullptr, o, &scores);
-    contact = scores[body::kLeftFootPart].contact + scores[body::kRightFootPart].contact;
-    return total;
-  };
-  LikelihoodOptions with = s.options, without = s.options;
-  with.contact_weight = 0.3;
-  without.contact_weight = 0;
-  double contact_truth = 0, contact_farther = 0, unused = 0;
-  const double truth_with = contactAndTotal(truth, with, contact_truth);
-  const double farther_with = contactAndTotal(farther, with, contact_farther);
-  const double truth_without = contactAndTotal(truth, without, unused);
-  const double farther_without = contactAndTotal(farther, without, unused);
-  std::cout << "contact (both feet): truth " << contact_truth << ", 0.4 m farther " << contact_farther
-            << "; truth's lead with the term " << truth_with - farther_with << ", without "
-            << truth_without - farther_without << "\n";
-  EXPECT_LT(contact_truth, -2.0);  // the ground below the truth's feet is background
-  EXPECT_GT(contact_farther, contact_truth + 2.0);
-  EXPECT_NEAR(truth_with - truth_without, -with.contact_weight * contact_truth, 1e-9);
-  EXPECT_GT(truth_with - farther_with, truth_without - farther_without + 0.5);
-}
-
 TEST(Likelihood, TheFlowTermAlonePrefersTheTrueMotion) {
   const Scene& s = scene();
   LikelihoodOptions flow_only = s.options;

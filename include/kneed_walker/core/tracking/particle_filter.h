@@ -42,19 +42,26 @@
 
 namespace kneed_walker::core::tracking {
 
+// The filter's settings; the paper's §5 uses 5000 particles and resamples below N_eff = 500.
+// Their ranges and help, for people: TrackerOptions' option table (tracker_options.h).
 struct FilterOptions {
-  int num_particles = 5000;               // N
-  double resample_ess_threshold = 500.0;  // resample when N_eff falls below this
-  int resample_lag_frames = 3;            // Δs
-  double resample_mixing = 0.95;          // γ: weight of the time-t weights in the proposal
-  int num_threads = 0;                    // 0: all cores
+  int num_particles = 5000;            // N
+  double resample_ess_fraction = 0.1;  // resample when N_eff falls below this times N, (0, 1]
+  int resample_lag_frames = 3;         // Δs
+  double resample_mixing = 0.95;       // γ: weight of the time-t weights in the proposal
+  int num_threads = 0;                 // 0: all cores
   std::uint64_t seed = 1;
-  bool keep_paths = false;                // keep the ancestry back to the first frame (wholeMapSequence)
+  bool keep_paths = false;             // keep the ancestry back to the first frame (wholeMapSequence)
   // The first frame draws and weighs this many times N candidates and keeps N of them by
   // systematic resampling (equal weights): a broad initial distribution is searched with k·N
-  // samples at k times one frame's cost, once. 1: the N drawn are the particles.
-  int initial_oversampling = 1;           // k ≥ 1
+  // samples at k times one frame's cost, once. 1: the N drawn are the particles. A tracker's
+  // initial guess is coarse (position ± 0.25 m, heading, phase and gait unknown): N particles
+  // drawn from it put none near the person, and the filter locks onto a nearby wrong walk that
+  // it cannot leave; k·N ≤ kMaxInitialCandidates (they are held at once).
+  int initial_oversampling = 32;       // k ≥ 1
 };
+// The most candidates a first frame may draw (FilterOptions::initial_oversampling).
+constexpr long long kMaxInitialCandidates = 10'000'000;
 
 // The genealogy of a particle system, generation by generation, pruned as it grows: a node is
 // kept while it is in the newest generation or has a kept child, so that it holds only the
@@ -152,8 +159,8 @@ class ParticleFilter {
 
   explicit ParticleFilter(const FilterOptions& options) : options_(options) {
     if (options.num_particles < 1) throw std::invalid_argument("num_particles must be >= 1");
-    if (!(options.resample_ess_threshold > 0 && options.resample_ess_threshold <= options.num_particles))
-      throw std::invalid_argument("resample_ess_threshold must lie in (0, num_particles]");
+    if (!(options.resample_ess_fraction > 0 && options.resample_ess_fraction <= 1))
+      throw std::invalid_argument("resample_ess_fraction must lie in (0, 1]");
     if (options.resample_lag_frames < 0) throw std::invalid_argument("resample_lag_frames must be >= 0");
     if (!(options.resample_mixing >= 0 && options.resample_mixing <= 1))
       throw std::invalid_argument("resample_mixing must lie in [0, 1]");
@@ -222,7 +229,7 @@ class ParticleFilter {
       sets_.pop_front();
     }
     report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
-    if (report.ess_before_resampling < options_.resample_ess_threshold) {
+    if (report.ess_before_resampling < options_.resample_ess_fraction * options_.num_particles) {
       const auto started = std::chrono::steady_clock::now();
       resample(propagate, report);
       report.resampled = true;

@@ -159,20 +159,20 @@ class Tracker {
   void stop();
   const vision::Camera& camera() const { return camera_; }
   const vision::GroundPlane& ground() const { return ground_; }
-  int lagFrames() const { return options_.resample_lag_frames; }  // Δs
+  int lagFrames() const { return options_.filter.resample_lag_frames; }  // Δs
   const std::vector<TrackerParticle>& particles() const { return filter_->states(); }
   const std::vector<double>& logWeights() const { return filter_->logWeights(); }
   // The MAP state sequence over the buffered frames (oldest first) as body poses, and their frames.
   std::vector<body::BodyPose> mapPoses(std::vector<int>* frames) const;
-  // With TrackerOptions::keep_whole_path: the MAP state sequence from the track's first frame.
+  // With FilterOptions::keep_paths: the MAP state sequence from the track's first frame.
   std::vector<body::BodyPose> wholeMapPoses(std::vector<int>* frames) const;
-  bool keepsWholePath() const { return options_.keep_whole_path; }
+  bool keepsWholePath() const { return options_.filter.keep_paths; }
   double personHeightM() const { return options_.person_height_m; }
   const TrackerTiming& timing() const { return timing_; }
   // The table's gaits a track's particles start on (its grid points the options allow).
   int gaitCount() const { return static_cast<int>(bank_.size()); }
   // The slopes of those gaits, rad, ascending: the table's nearest the ground's that has any,
-  // and with TrackerOptions::hill_gaits every slope between it and the level that has any.
+  // and every slope between it and the level that has any.
   const std::vector<double>& gaitSlopesRad() const { return gait_slopes_rad_; }
   // The pose of a particle (world, metres).
   body::BodyPose pose(const TrackerParticle& particle) const;

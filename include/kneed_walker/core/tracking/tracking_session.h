@@ -50,11 +50,6 @@ struct SessionOptions {
   // them, within this, m, [0, 5] (0: never; the person is looked for as anyone else,
   // heading_frames on).
   double reacquire_distance_m = 1.0;
-  // A person found in the image is tracked with the height of their blob on the ground (the
-  // mean of the two sightings), clamped to [min_person_height_m, max_person_height_m]; false:
-  // everyone is the tracker's person_height_m.
-  bool estimate_person_height = false;
-  double min_person_height_m = 1.5, max_person_height_m = 1.95;  // [1, 2.3]
   vision::PersonDetectorOptions detector;
 };
 
@@ -68,7 +63,9 @@ TrackerFactory trackerFactory(const vision::Camera& camera, const vision::Ground
                               const gait::GaitTable& prior_table, const prior::PriorOptions& prior,
                               const TrackerOptions& options, const vision::LikelihoodOptions& likelihood = {});
 
-// Every problem with the options, naming the field; empty when usable.
+// The session's options people set: name, range, unit, help (common/option_table.h).
+const common::OptionTable<SessionOptions>& sessionOptionTable();
+// Every problem with the options, naming the option; empty when usable.
 std::vector<std::string> validate(const SessionOptions& options);
 
 enum class SessionState {
@@ -167,10 +164,8 @@ class TrackingSession {
     bool running() const { return tracker && tracker->started(); }
   };
   SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
-  // A guess for a person found in the image (the options' start speeds; their blob's height
-  // when estimate_person_height).
-  InitialGuess foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad, double heading_sd_rad,
-                                double blob_height_m) const;
+  // A guess for a person found in the image (the options' start speeds).
+  InitialGuess foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad, double heading_sd_rad) const;
   // The people found in the frame away from the running tracks.
   std::vector<vision::PersonCandidate> untrackedPeople(const cv::Mat& bgr) const;
   // Guesses from the people seen now (untracked) and heading_frames ago.

@@ -13,8 +13,10 @@
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <string>
 #include <vector>
 
+#include "kneed_walker/core/common/option_table.h"
 #include "kneed_walker/core/vision/appearance_model.h"
 #include "kneed_walker/core/vision/background_model.h"
 #include "kneed_walker/core/vision/body_projection.h"
@@ -34,19 +36,17 @@ struct LikelihoodOptions {
   double outside_ratio = -3.0;  // the log ratio a part's pixel scores outside the evidence's region or image
   int min_part_pixels = 6;      // a part with fewer visible pixels is left out (hidden)
   // Weights of each part's appearance and flow averages. The paper sums the averages with
-  // weight 1; measured on the four synthetic sequences (2000 particles, 3 seeds; README
-  // "The tracker"), weight 1 collapses N_eff to a few particles every frame and loses the person
-  // in most runs (mean joint error 232 mm on average), 0.5 and 0.15 in some (98 and 99 mm),
-  // 0.3 least (87 mm).
+  // weight 1, which makes neighbouring particles' log-likelihoods differ by tens: N_eff collapses
+  // to a few particles every frame and the person is lost in most runs; of 0.15, 0.3, 0.5 and 1,
+  // 0.3 tracked the synthetic sequences best.
   double appearance_weight = 0.3;
   double flow_weight = 0.3;
-  // Weight of the ground-contact term (not in the paper): the average foot log ratio of the
-  // image rows just below each foot's outline, which should be background, counts against the
-  // body. Off by default: on the synthetic sequences (2000 particles, seeds 1-6, README "The
-  // tracker") 0.3 tracked the brisk oblique walk better (58-85 mm against 59-228) but the
-  // prior-made walks worse (50.8 mm mean against 38.3), and 0.1 was no better than 0.
-  double contact_weight = 0;
 };
+
+// The likelihood's options people set: name, range, unit, help (common/option_table.h).
+const common::OptionTable<LikelihoodOptions>& likelihoodOptionTable();
+// Every problem with those options, naming each; empty when usable.
+std::vector<std::string> validate(const LikelihoodOptions& options);
 
 class FrameEvidence {
  public:
@@ -78,7 +78,6 @@ struct PartScore {
   double flow = 0;        // average flow log ratio over its visible grid points
   int pixels = 0;         // visible pixels (inside and outside the evidence's region)
   int flow_points = 0;
-  double contact = 0;     // feet only: average log ratio of the rows just below the foot (0 if none)
 };
 using PartScores = std::array<PartScore, body::kNumBodyParts>;
 
