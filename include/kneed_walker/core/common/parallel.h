@@ -1,8 +1,7 @@
 // The one way the core spreads per-particle work over the cores: a parallel loop over index
 // ranges on TBB's work-stealing scheduler, in an arena of the requested size.
 //
-// Chosen by measurement (bench_dynamics' batch, 5000 particles × ~6 µs, 2 cores; README
-// "Parallel work"): TBB, OpenCV's parallel_for_ and a hand-written pool of persistent threads
+// Chosen by measurement (bench_dynamics' batch, 5000 particles × ~6 µs, 2 cores): TBB, OpenCV's parallel_for_ and a hand-written pool of persistent threads
 // were within noise of each other; TBB is a well-kept library, lets nested loops share the
 // cores, and bounds the thread count per call.
 //

@@ -86,7 +86,7 @@ struct SimulationOptions {
   // a swing foot that scuffs while passing (McGeer's walkers do), and a foot that went under
   // the ground there never strikes it (a heel strike is a crossing from above): it would walk on
   // through the ground, as far as 0.4 m below it, and such a walker is no walking person. The
-  // shipped gaits dip at most 0.024 L passing the stance foot (README "Optimal cyclic gaits").
+  // shipped gaits dip at most 0.024 L passing the stance foot.
   // The gait optimiser turns this off (infinity), to keep its stride function smooth, and then
   // checks its optima with it on (OptimalGait::walks_at_runtime).
   double max_swing_penetration = 0.03;

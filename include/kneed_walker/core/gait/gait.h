@@ -33,8 +33,7 @@ struct Gait {
 // brisk walk: with κK2 = 0 the optimiser closes no level cycle at 5–7 km/h below 0.9 m steps
 // (105 of the paper's 270 grid points in all), and most free optima there stiffen the swing knee
 // (16 of 20 at 0.5–0.8 m: κK2 of 1.4–5 M g L/rad), which straightens the leg in time for a short,
-// quick step. So the prior's table optimises κK2 at each grid point (204 of the 270; the README
-// has the figures).
+// quick step. So the prior's table optimises κK2 at each grid point (204 of the 270).
 //
 // The paper's φ⁰To = γ/3 is a lean of γ/3 into the slope from the vertical ("a slight lean of
 // the torso into the slope", its Fig. 5; forward uphill, back downhill, §3.3); walker angles

@@ -99,7 +99,7 @@ struct GaitOptimizerOptions {
   // paper. The shipped free table is solved with 0.01 (gait::GaitTable::swing_bounds records
   // it). From an optimum that swings a nearly straight leg (as under the soft scuff penalty
   // alone) the bound lifts the foot only to about the ground: the table was grown from a seed
-  // gait whose swing knee is already bent at heel strike (README "Optimal cyclic gaits").
+  // gait whose swing knee is already bent at heel strike.
   double min_passing_clearance = -std::numeric_limits<double>::infinity();
   // When finite, the swing knee's largest flexion over the stride
   // (TorqueIntegrals::max_swing_knee_flexion) must be at most this, rad: a third inequality.
