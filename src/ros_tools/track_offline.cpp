@@ -205,6 +205,9 @@ int main(int argc, char** argv) {
   kw::tracking::InitialGuess guess;
   bool heading_given = false;
   int first_frame = 0, max_frames = 0;
+  // Offline only (a stream cannot see its future): the background from frames spread over the
+  // whole input.
+  int background_samples = 25;
   bool filtered = false, lagged = false, background_from_start = false;
   kw::tracking::TrackerOptions options;
   kw::vision::LikelihoodOptions likelihood;
@@ -243,6 +246,9 @@ int main(int argc, char** argv) {
   app.add_option("--first-frame", first_frame, "start tracking at this frame")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--frames", max_frames, "track at most this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--background", background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
+  app.add_option("--background-samples", background_samples,
+                 "frames spread over the whole input that the background is learned from")
+      ->capture_default_str()->check(CLI::Range(1, 500));
   app.add_flag("--background-from-start", background_from_start,
                "learn the background from the first --background-frames frames, as the nodelet does, "
                "instead of frames spread over the whole input");
@@ -359,7 +365,7 @@ int main(int argc, char** argv) {
       session.setBackground(kw::vision::BackgroundModel::learn({image}, likelihood.background));
     } else if (!background_from_start) {
       std::vector<cv::Mat> samples;
-      const int n = std::max(1, std::min(session_options.background_frames, total));
+      const int n = std::max(1, std::min(background_samples, total));
       cv::Mat frame;
       double stamp;
       for (int index = 0, next = 0; static_cast<int>(samples.size()) < n && source->next(frame, stamp); ++index) {
