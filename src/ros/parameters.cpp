@@ -211,6 +211,10 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
     if (!path->empty() && !std::ifstream(*path))
       reader.addProblem(reader.qualified(name) + " = '" + *path + "': cannot read the file");
 
+  if (!r.camera_file.empty() && config.tracker.ground_slope_rad != 0)
+    reader.addProblem(reader.qualified("ground_slope_rad") + " = " + std::to_string(config.tracker.ground_slope_rad) +
+                      " with camera_file: the calibration gives the ground (its ground_slope_rad, level when it has "
+                      "none); leave ground_slope_rad at 0");
   if (r.world_frame.empty() || r.world_frame.front() == '/')
     reader.addProblem(reader.qualified("world_frame") + " = '" + r.world_frame +
                       "' must be a non-empty tf2 frame id without a leading '/'");

@@ -276,11 +276,23 @@ int main(int argc, char** argv) {
                  "the bounding box of the projected parts' outlines");
   CLI11_PARSE(app, argc, argv);
   options.filter.keep_paths = !filtered && !lagged;
+  // The tables' ranges were checked as the options were parsed; what is left relates options.
+  bool refused = false;
   for (const std::vector<std::string>& problems : {validate(options), validate(session_options), validate(likelihood)})
-    if (!problems.empty()) {
-      std::fprintf(stderr, "track_offline: --%s\n", kw::common::kebabCase(problems.front()).c_str());
-      return 1;
+    for (const std::string& problem : problems) {
+      const std::size_t name_end = problem.find(' ');  // each problem starts with the option's name
+      std::fprintf(stderr, "track_offline: --%s%s\n", kw::common::kebabCase(problem.substr(0, name_end)).c_str(),
+                   problem.substr(name_end).c_str());
+      refused = true;
     }
+  if (!camera_path.empty() && options.ground_slope_rad != 0) {
+    std::fprintf(stderr,
+                 "track_offline: --ground-slope-rad %g: the calibration --camera %s gives the ground (its "
+                 "ground_slope_rad, level when it has none); leave --ground-slope-rad out\n",
+                 options.ground_slope_rad, camera_path.c_str());
+    refused = true;
+  }
+  if (refused) return 1;
   // A track started from a box or a position starts on the same speeds as a person found.
   guess.min_speed_kmh = session_options.min_start_speed_kmh;
   guess.max_speed_kmh = session_options.max_start_speed_kmh;
@@ -349,7 +361,7 @@ int main(int argc, char** argv) {
     }
     const kw::vision::GroundPlane ground =
         camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(camera_path);
-    if (!camera_path.empty()) options.ground_slope_rad = ground.slope_rad;  // the file's ground plane
+    if (!camera_path.empty()) options.ground_slope_rad = ground.slope_rad;
     const kw::gait::GaitTable table =
         kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     kw::tracking::TrackingSession session(

@@ -25,6 +25,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -170,6 +172,17 @@ int run(int argc, char** argv) {
                  check_out_path.c_str());
     return 1;
   }
+  // Both outputs are tried before any work, so that a run that cannot write one writes neither.
+  for (const auto& [option, path] : {std::pair<const char*, const std::string*>{"--out", &out_path},
+                                     {"--check-out", &check_out_path}}) {
+    if (path->empty() || std::filesystem::exists(*path)) continue;
+    const bool writable = static_cast<bool>(std::ofstream(*path));
+    std::filesystem::remove(*path);
+    if (!writable) {
+      std::fprintf(stderr, "calibrate_camera: %s %s: cannot write\n", option, path->c_str());
+      return 1;
+    }
+  }
   const cv::Mat frame = check_path.empty() ? cv::Mat() : readFrame(check_path);
 
   std::vector<kw::vision::GroundPointObservation> marks;
@@ -196,7 +209,11 @@ int run(int argc, char** argv) {
                    "calibrate_camera: warning: a mark is %.1f px from where the calibration puts it; check its "
                    "pixel and its ground position (draw them with --check)\n",
                    fit.max_px);
-    fit.camera.save(out_path, camera_unit_m);
+    try {
+      fit.camera.save(out_path, camera_unit_m);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("--out " + out_path + ": " + e.what());
+    }
     std::printf("wrote %s (t in units of %g m)\n", out_path.c_str(), camera_unit_m);
     camera = fit.camera;
   }

@@ -249,6 +249,8 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
   bad.setParam("person_mass_kg", "heavy");
   bad.setParam("num_partcles", 100);
   bad.setParam("image_transport", "carrier_pigeon");
+  bad.setParam("camera_file", "/nonexistent/camera.yml");
+  bad.setParam("ground_slope_rad", 0.1);
   try {
     loadTrackerNodeConfig(bad);
     FAIL() << "bad parameters were accepted";
@@ -258,6 +260,7 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
     EXPECT_NE(what.find("/bad_parameters/person_mass_kg must be a number"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/num_partcles is not a parameter"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/image_transport = 'carrier_pigeon'"), std::string::npos) << what;
+    EXPECT_NE(what.find("/bad_parameters/ground_slope_rad = 0.100000 with camera_file"), std::string::npos) << what;
   }
 }
 

@@ -29,7 +29,7 @@ const common::OptionTable<TrackerOptions>& trackerOptionTable() {
       {"person_breadth_scale", [](O& o) -> OptionField { return &o.person_breadth_scale; }, 0.5, 3, "",
        "the projected torso and thighs this many times as broad as the body model's (a coat, arms)"},
       {"ground_slope_rad", [](O& o) -> OptionField { return &o.ground_slope_rad; }, -0.2, 0.2, "rad",
-       "ground slope along the walk, positive uphill (a camera file's ground plane overrides it)"},
+       "ground slope along the walk, positive uphill (0 with a calibration file: the file gives the ground)"},
       {"min_gait_speed_kmh", [](O& o) -> OptionField { return &o.min_gait_speed_kmh; }, 0, 20, "km/h",
        "the slowest of the gait table's gaits the particles may walk (1.5 with min_gait_step_m 0.3: strolling)"},
       {"min_gait_step_m", [](O& o) -> OptionField { return &o.min_gait_step_m; }, 0, 3, "m",
