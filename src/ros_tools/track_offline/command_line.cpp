@@ -1,0 +1,162 @@
+#include "command_line.h"
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <utility>
+
+#include "options.h"  // src/tools: addTableOptions, FiniteRange
+#include "package_files.h"
+
+namespace kneed_walker::tools::track_offline {
+
+namespace kw = kneed_walker::core;
+
+namespace {
+
+void addInputOptions(CLI::App& app, InputOptions& input) {
+  auto* source = app.add_option_group("input", "one of --bag, --video");
+  source->add_option("--bag", input.bag_path, "rosbag with image and camera_info topics")->check(CLI::ExistingFile);
+  source->add_option("--video", input.video_path, "video file (with --camera)")->check(CLI::ExistingFile);
+  source->require_option(1);
+  app.add_option("--camera", input.camera_path,
+                 "calibration (OpenCV YAML; may hold the ground plane); a bag's camera_info + /tf_static otherwise")
+      ->check(CLI::ExistingFile);
+  app.add_option("--camera-unit", input.camera_unit_m, "metres per unit of the calibration's t")->capture_default_str()
+      ->check(FiniteRange(1e-6, 1e3));
+  app.add_option("--image-topic", input.image_topic, "the bag's image topic")->capture_default_str();
+  app.add_option("--info-topic", input.info_topic, "the bag's camera_info topic")->capture_default_str();
+  app.add_option("--fps", input.fps, "video frame rate (default: the container's)")->check(FiniteRange(0.1, 1000));
+  app.add_option("--first-frame", input.first_frame, "start tracking at this frame")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--frames", input.max_frames, "track at most this many frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option("--background", input.background_path, "an image of the empty scene instead")->check(CLI::ExistingFile);
+  app.add_option("--background-samples", input.background_samples,
+                 "frames spread over the whole input that the background is learned from")
+      ->capture_default_str()->check(CLI::Range(1, 500));
+  app.add_flag("--background-from-start", input.background_from_start,
+               "learn the background from the first --background-frames frames, as the nodelet does, "
+               "instead of frames spread over the whole input");
+}
+
+void addStartOptions(CLI::App& app, StartOptions& start, std::string& stance) {
+  app.add_option("--init-box", start.init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4)
+      ->check(FiniteRange(-1e5, 1e5));
+  app.add_option("--boxes", start.boxes_path,
+                 "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box; the walking direction "
+                 "from the nearest box 5 frames on")
+      ->check(CLI::ExistingFile);
+  app.add_option("--init-position", start.init_position, "ground position X Y (m) instead of a box")->expected(2)
+      ->check(FiniteRange(-1e5, 1e5));
+  app.add_option("--init-position-sd", start.guess.position_sd_m, "spread of the initial position, m")
+      ->capture_default_str()->check(FiniteRange(0.0, 10.0));
+  app.add_option("--init-heading", start.guess.heading_rad, "walking direction, rad from +X towards +Y (default: unknown)")
+      ->check(FiniteRange(-100, 100))->each([&start](const std::string&) { start.heading_given = true; });
+  app.add_option("--init-heading-sd", start.guess.heading_sd_rad, "spread of the heading, rad (≥ π: any direction)")
+      ->capture_default_str()->check(FiniteRange(0.0, 10.0));
+  app.add_option("--init-stance", stance, "the leg on the ground in the first frame: left or right (default: unknown)")
+      ->check(CLI::IsMember({"left", "right"}));
+}
+
+void addOutputOptions(CLI::App& app, OutputOptions& output, bool& filtered, bool& lagged) {
+  app.add_option("--out-csv", output.csv_path, "MAP joints per frame and body (frame,stamp,joint,x,y,z,body)")->required();
+  app.add_option("--overlay", output.overlay_path, "overlay video (MJPG .avi)");
+  app.add_option("--strip", output.strip_path,
+                 "a picture of the overlay at --strip-frames, each cropped around the tracked body, side by side (PNG)");
+  app.add_option("--strip-frames", output.strip_frames, "frames for --strip, comma-separated")
+      ->delimiter(',')->check(CLI::NonNegativeNumber);
+  app.add_option("--out-boxes", output.boxes_path,
+                 "the MAP body's image box per frame and body, as written to --out-csv (frame,x1,y1,x2,y2,body; px): "
+                 "the bounding box of the projected parts' outlines");
+  auto* filtered_flag = app.add_flag("--filtered", filtered,
+                                     "write each frame's best particle as it comes, instead of each track's whole MAP "
+                                     "state sequence (one particle's path, written when the track ends)");
+  app.add_flag("--lagged", lagged,
+               "write each frame's MAP state Δs frames later, as the nodelet publishes it (the best particle's "
+               "ancestry through the buffer; consecutive frames may come from different particles), instead "
+               "of each track's whole MAP state sequence")
+      ->excludes(filtered_flag);
+}
+
+bool sameFile(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  return fs::weakly_canonical(fs::absolute(a)) == fs::weakly_canonical(fs::absolute(b));
+}
+
+// What the tables' ranges cannot say: options that relate to each other. Each problem names
+// the option as the user typed it.
+std::vector<std::string> problems(const Options& options) {
+  std::vector<std::string> found;
+  for (const std::vector<std::string>& table_problems :
+       {validate(options.tracker), validate(options.session), validate(options.likelihood)})
+    for (const std::string& problem : table_problems) {
+      const std::size_t name_end = problem.find(' ');  // each problem starts with the option's name
+      found.push_back("--" + kw::common::kebabCase(problem.substr(0, name_end)) + problem.substr(name_end));
+    }
+  if (!options.input.camera_path.empty() && options.tracker.ground_slope_rad != 0)
+    found.push_back(cv::format("--ground-slope-rad %g: the calibration --camera %s gives the ground (its "
+                               "ground_slope_rad, level when it has none); leave --ground-slope-rad out",
+                               options.tracker.ground_slope_rad, options.input.camera_path.c_str()));
+  const OutputOptions& output = options.output;
+  if (!output.strip_path.empty() && output.strip_frames.empty()) found.push_back("--strip needs --strip-frames");
+  if (!output.strip_path.empty() && !cv::haveImageWriter(output.strip_path))
+    found.push_back("--strip " + output.strip_path + ": not a picture file OpenCV can write (.png, .jpg)");
+  // Two outputs on one file: one of them would be lost.
+  const std::vector<std::pair<const char*, std::string>> outputs = {{"--out-csv", output.csv_path},
+                                                                    {"--out-boxes", output.boxes_path},
+                                                                    {"--overlay", output.overlay_path},
+                                                                    {"--strip", output.strip_path}};
+  for (size_t i = 0; i < outputs.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (!outputs[i].second.empty() && !outputs[j].second.empty() &&
+          sameFile(outputs[i].second, outputs[j].second))
+        found.push_back(std::string(outputs[i].first) + " " + outputs[i].second + ": the same file as " +
+                        outputs[j].first + "; give each output its own file");
+  return found;
+}
+
+}  // namespace
+
+std::optional<Options> parseOptions(int argc, char** argv, int& exit_code) {
+  CLI::App app{"Tracks a walking person in a bag or video with the Kneed Walker; writes the MAP joints as CSV."};
+  Options options;
+  options.gait_table_path = packageFile("config/prior_gait_table.yaml");
+  options.prior_path = packageFile("config/prior.yaml");
+  options.walker_model_path = packageFile("config/walker_model.yaml");
+  std::string stance;
+  bool filtered = false, lagged = false;
+  addInputOptions(app, options.input);
+  addStartOptions(app, options.start, stance);
+  addTableOptions(app, kw::tracking::trackerOptionTable(), options.tracker);
+  addTableOptions(app, kw::tracking::sessionOptionTable(), options.session);
+  addTableOptions(app, kw::vision::likelihoodOptionTable(), options.likelihood);
+  app.add_option("--table", options.gait_table_path, "the prior's gait table")->check(CLI::ExistingFile)
+      ->capture_default_str();
+  app.add_option("--prior", options.prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--walker-model", options.walker_model_path, "body proportions")->check(CLI::ExistingFile)
+      ->capture_default_str();
+  addOutputOptions(app, options.output, filtered, lagged);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    exit_code = app.exit(e);
+    return std::nullopt;
+  }
+  options.output.estimate = filtered ? WrittenEstimate::kFiltered
+                            : lagged ? WrittenEstimate::kLagged
+                                     : WrittenEstimate::kMapSequence;
+  options.tracker.filter.keep_paths = options.output.estimate == WrittenEstimate::kMapSequence;
+  if (!stance.empty()) options.start.guess.stance_leg = stance == "left" ? kw::dynamics::Leg::kLeft : kw::dynamics::Leg::kRight;
+  // A track started from a box or a position starts on the same speeds as a person found.
+  options.start.guess.min_speed_kmh = options.session.min_start_speed_kmh;
+  options.start.guess.max_speed_kmh = options.session.max_start_speed_kmh;
+  const std::vector<std::string> found = problems(options);
+  for (const std::string& problem : found) std::fprintf(stderr, "track_offline: %s\n", problem.c_str());
+  if (found.empty()) return options;
+  exit_code = 1;
+  return std::nullopt;
+}
+
+}  // namespace kneed_walker::tools::track_offline
