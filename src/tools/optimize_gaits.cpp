@@ -11,14 +11,11 @@
 // With --prior-fixed the controls that the prior fixes are held at its values (the table
 // config/prior_gait_table.yaml); without, all are optimised (config/gait_table.yaml).
 //
-// A first gait is found by continuation from McGeer's passive walker at the seed point; every
-// other grid point is then solved warm-started from its already solved neighbours (the points
-// with the most solved neighbours first, on all cores; with --seed-table, that table's gait at
-// the point first), and where those fail, by continuation from the nearest neighbour through
-// the midpoint. A point that failed is tried again whenever neighbours have become feasible
-// since its last try. The table is rewritten after every gait, so an interrupted run continues
-// with --resume. With --polish, every feasible gait is then solved again from its neighbours'
-// gaits, sweep after sweep, and the lowest effort kept (optimizer::polishTable).
+// The table is grown from one gait (optimizer::seedTable, growTable: on all cores; with
+// --seed-table, that table's gait at each point is tried first) and rewritten after every gait,
+// so an interrupted run continues with --resume. With --polish, every feasible gait is then
+// solved again from its neighbours' gaits, sweep after sweep, and the lowest effort kept
+// (optimizer::polishTable).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -26,17 +23,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <mutex>
-#include <optional>
 
 #include "kneed_walker/core/common/parallel.h"
 #include "kneed_walker/core/gait/gait_table.h"
 #include "kneed_walker/core/optimizer/optimal_gaits.h"
+#include "kneed_walker/core/optimizer/table_growth.h"
 #include "kneed_walker/core/optimizer/table_polish.h"
 #include "options.h"
 #include "tool_main.h"
@@ -45,30 +39,6 @@
 namespace kw = kneed_walker::core;
 
 namespace {
-
-// Grid neighbours (Chebyshev distance 1) of a point.
-std::vector<int> neighbours(const kw::gait::GaitGrid& grid, int index) {
-  const auto c = grid.cell(index);
-  const int n[3] = {static_cast<int>(grid.speeds_kmh.size()),
-                    static_cast<int>(grid.step_lengths_m.size()),
-                    static_cast<int>(grid.slopes_rad.size())};
-  std::vector<int> result;
-  for (int dv = -1; dv <= 1; ++dv)
-    for (int dl = -1; dl <= 1; ++dl)
-      for (int ds = -1; ds <= 1; ++ds) {
-        const int v = c[0] + dv, l = c[1] + dl, s = c[2] + ds;
-        if ((dv || dl || ds) && v >= 0 && v < n[0] && l >= 0 && l < n[1] && s >= 0 && s < n[2])
-          result.push_back(grid.index(v, l, s));
-      }
-  return result;
-}
-
-double gridDistance(const kw::gait::GaitGrid& grid, int a, int b) {
-  const auto ca = grid.cell(a), cb = grid.cell(b);
-  double d = 0;
-  for (int i = 0; i < 3; ++i) d += (ca[i] - cb[i]) * (ca[i] - cb[i]);
-  return std::sqrt(d);
-}
 
 // On --resume with new grid axes, each of the table's axis values that is not on the new axis
 // drops the table's gaits there. A value that misses one of the table's by a rounding (0.075
@@ -112,22 +82,14 @@ void writeAtomically(const std::string& path, const kw::gait::GaitTable& table) 
   std::filesystem::rename(tmp, path);
 }
 
-// Re-simulates every feasible gait of `table` and marks those that no longer meet the
-// optimiser's constraints (a table written before a rule was added, such as the pushing
-// ground at heel strike) as failed, so that --retry-failed solves them again and --merge never
-// takes them. Returns how many were marked.
-int markStaleGaits(kw::gait::GaitTable& table, const kw::dynamics::BodyProportions& proportions,
-                   const kw::optimizer::GaitOptimizerOptions& options, const std::string& path) {
-  int stale = 0;
-  for (auto& entry : table.entries) {
-    if (!entry.feasible || kw::optimizer::simulatedGait(proportions, entry.gait, options).feasible()) continue;
-    entry.feasible = false;
-    ++stale;
-  }
+// Marks the gaits of `table` that no longer meet the constraints (optimizer::markStaleGaits),
+// saying so: --retry-failed then solves them again and --merge never takes them.
+void markStaleGaits(kw::gait::GaitTable& table, const kw::optimizer::GaitOptimizerOptions& options,
+                    const std::string& path) {
+  const int stale = kw::optimizer::markStaleGaits(table, options);
   if (stale > 0)
     std::fprintf(stderr, "optimize_gaits: %d gaits of %s no longer meet the constraints (re-simulated): marked failed\n",
                  stale, path.c_str());
-  return stale;
 }
 
 std::string clock(double seconds) {
@@ -246,8 +208,8 @@ int run(int argc, char** argv) {
       kw::gait::GaitTable other = kw::gait::loadGaitTable(merge_table, proportions);
       takeSwingBounds(table);
       other.swing_bounds = table.swing_bounds;  // its gaits are checked against them next
-      markStaleGaits(table, proportions, options, out);
-      markStaleGaits(other, proportions, options, merge_table);
+      markStaleGaits(table, options, out);
+      markStaleGaits(other, options, merge_table);
       const int taken = kw::gait::keepLowerEffort(table, other);
       writeAtomically(out, table);
       int feasible = 0;
@@ -301,7 +263,7 @@ int run(int argc, char** argv) {
         entry.gait.controls = kw::gait::withFixedControls(entry.gait.controls, *table.fixed);
     }
     takeSwingBounds(table);
-    markStaleGaits(table, proportions, options, out);
+    markStaleGaits(table, options, out);
     if (retry_failed)
       for (auto& e : table.entries)
         if (e.solved && !e.feasible) e.solved = false;
@@ -320,63 +282,25 @@ int run(int argc, char** argv) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   };
 
-  // The seed: the grid point nearest the requested one.
-  int seed = 0;
-  {
-    double best = 1e300;
-    for (int i = 0; i < grid.size(); ++i) {
-      const auto c = grid.cell(i);
-      const double d = std::pow(grid.speeds_kmh[c[0]] - seed_speed, 2) +
-                       std::pow(grid.step_lengths_m[c[1]] - seed_step, 2) +
-                       std::pow(grid.slopes_rad[c[2]] - seed_slope, 2);
-      if (d < best) best = d, seed = i;
-    }
-  }
-  // The --seed-table, and its feasible gaits at this grid's points, tried first at each.
-  std::optional<kw::gait::GaitTable> seed_from;
-  std::vector<std::optional<kw::gait::Gait>> seed_gaits(grid.size());
+  kw::optimizer::GrowthOptions growth;
+  growth.threads = threads;
+  growth.max_attempts = max_attempts;
+  growth.seed_point = kw::optimizer::nearestGridPoint(grid, seed_speed, seed_step, seed_slope);
+  // The --seed-table's feasible gaits at this grid's points, tried first at each; with
+  // --seed-only, only its gait nearest the seed point (the table grown from that one gait).
   if (!seed_table.empty()) {
-    seed_from = kw::gait::loadGaitTable(seed_table, proportions);
-    const kw::gait::GaitTable on_grid = kw::gait::regridded(*seed_from, grid);
+    const kw::gait::GaitTable on_grid = kw::gait::regridded(kw::gait::loadGaitTable(seed_table, proportions), grid);
+    growth.first_tries.resize(grid.size());
     for (int i = 0; i < grid.size(); ++i)
-      if (on_grid.entries[i].feasible) seed_gaits[i] = on_grid.entries[i].gait;
+      if (on_grid.entries[i].feasible) growth.first_tries[i] = on_grid.entries[i].gait;
+    if (seed_only) kw::optimizer::keepOnlyNearestFirstTry(growth, grid);
   }
-  // With --seed-only, only the seed table's gait nearest the seed point: the table is grown
-  // from that one gait.
-  auto keepOnlyNearestSeedGait = [&] {
-    int nearest = -1;
-    for (int i = 0; i < grid.size(); ++i)
-      if (seed_gaits[i] && (nearest < 0 || gridDistance(grid, i, seed) < gridDistance(grid, nearest, seed))) nearest = i;
-    for (int i = 0; i < grid.size(); ++i)
-      if (i != nearest) seed_gaits[i].reset();
-  };
-  if (seed_only) keepOnlyNearestSeedGait();
-  const bool any_feasible = std::any_of(table.entries.begin(), table.entries.end(),
-                                        [](const kw::gait::GaitTableEntry& e) { return e.feasible; });
-  if (!any_feasible) {
-    kw::optimizer::OptimalGait gait;
-    if (!seed_table.empty()) {
-      // From the seed table's gait at the seed point; when that does not lead to a gait here
-      // (with the prior's fixed controls imposed, a free gait can land on a pulling ground and
-      // SLSQP stall), from its gaits at the next nearest points, up to 12.
-      std::fprintf(stderr, "optimize_gaits: seeding from %s's gaits, nearest the seed point first...\n",
-                   seed_table.c_str());
-      std::vector<int> order;
-      for (int i = 0; i < grid.size(); ++i)
-        if (seed_gaits[i]) order.push_back(i);
-      std::sort(order.begin(), order.end(),
-                [&](int a, int b) { return gridDistance(grid, a, seed) < gridDistance(grid, b, seed); });
-      for (size_t k = 0; k < order.size() && k < 12 && !gait.feasible(); ++k) {
-        gait = kw::optimizer::optimizeGait(proportions, grid.target(order[k]), *seed_gaits[order[k]], options);
-        if (gait.feasible()) seed = order[k];
-      }
-    }
-    // Without a seed table, or when none of its gaits led to one.
-    if (!gait.feasible()) {
-      std::fprintf(stderr, "optimize_gaits: seeding by continuation from McGeer's passive gait...\n");
-      gait = kw::optimizer::seedGait(proportions, grid.target(seed), options);
-    }
-    table.entries[seed] = kw::optimizer::tableEntry(gait);
+  if (std::none_of(table.entries.begin(), table.entries.end(), [](const auto& e) { return e.feasible; })) {
+    std::fprintf(stderr, "optimize_gaits: seeding %s...\n",
+                 seed_table.empty() ? "by continuation from McGeer's passive gait"
+                                    : ("from " + seed_table + "'s gaits nearest the seed point, else by continuation "
+                                       "from McGeer's passive gait").c_str());
+    const kw::optimizer::OptimalGait gait = kw::optimizer::seedTable(table, options, growth);
     writeAtomically(out, table);
     if (!gait.feasible()) {
       std::fprintf(stderr, "optimize_gaits: the seed gait did not converge (residual %g)\n",
@@ -385,144 +309,22 @@ int run(int argc, char** argv) {
     }
   }
 
-  std::mutex mutex;
-  std::condition_variable changed;
-  std::vector<bool> in_progress(grid.size(), false);
-  int running = 0;
   const bool tty = isatty(STDERR_FILENO);
-  auto progress = [&] {
-    int solved = 0, feasible = 0;
-    for (const auto& e : table.entries) solved += e.solved, feasible += e.feasible;
-    const int width = 30, filled = width * solved / grid.size();
-    const double rate = elapsed() / std::max(1, solved);
-    std::fprintf(stderr, "%s[%s%s] %d/%d solved, %d feasible | %s elapsed, ~%s left%s",
-                 tty ? "\r" : "", std::string(filled, '#').c_str(),
-                 std::string(width - filled, '-').c_str(), solved, grid.size(), feasible,
-                 clock(elapsed()).c_str(), clock(rate * (grid.size() - solved)).c_str(),
-                 tty ? "" : "\n");
+  auto progress = [&](const kw::optimizer::GrowthProgress& p) {
+    const int width = 30, filled = width * p.solved / p.points;
+    const double rate = elapsed() / std::max(1, p.solved);
+    std::fprintf(stderr, "%s[%s%s] %d/%d solved, %d feasible | %s elapsed, ~%s left%s", tty ? "\r" : "",
+                 std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), p.solved, p.points,
+                 p.feasible, clock(elapsed()).c_str(), clock(rate * (p.points - p.solved)).c_str(), tty ? "" : "\n");
   };
-
-  // The feasible neighbours of a point, bit k for the k-th of neighbours(). A point that failed
-  // is tried again, from the neighbours that have become feasible since its last try (a point
-  // solved early, from one neighbour, often succeeds from the ones solved after it).
-  auto feasibleNeighbours = [&](int point) {
-    std::uint32_t mask = 0;
-    const std::vector<int> around = neighbours(grid, point);
-    for (size_t k = 0; k < around.size(); ++k)
-      if (table.entries[around[k]].feasible) mask |= std::uint32_t{1} << k;
-    return mask;
-  };
-  std::vector<std::uint32_t> tried_from(grid.size(), 0);  // feasible neighbours at the last try
-  // A failed gait of a resumed table counts as tried from its neighbours as they are
-  // (--retry-failed solves it again from all).
-  for (int i = 0; i < grid.size(); ++i)
-    if (table.entries[i].solved && !table.entries[i].feasible) tried_from[i] = feasibleNeighbours(i);
-
-  // The next point to solve: unsolved, or failed with new feasible neighbours since its last
-  // try, not in progress, with the most (new) warm starts (feasible neighbours, and the seed
-  // table's gait there) (nearest the seed on ties); -1 if none is ready.
-  auto nextPoint = [&]() {
-    int best = -1, best_count = 0;
-    double best_distance = 0;
-    for (int i = 0; i < grid.size(); ++i) {
-      const kw::gait::GaitTableEntry& entry = table.entries[i];
-      if (entry.feasible || in_progress[i]) continue;
-      const std::uint32_t fresh = feasibleNeighbours(i) & ~tried_from[i];
-      int count = __builtin_popcount(fresh);
-      if (entry.solved && count == 0) continue;
-      if (!entry.solved) count += seed_gaits[i].has_value();
-      const double distance = gridDistance(grid, i, seed);
-      if (count > best_count || (count == best_count && count > 0 && distance < best_distance))
-        best = i, best_count = count, best_distance = distance;
-    }
-    return best;
-  };
-
-  auto worker = [&] {
-    std::unique_lock<std::mutex> lock(mutex);
-    while (true) {
-      const int point = nextPoint();
-      if (point < 0) {
-        if (running == 0) {
-          changed.notify_all();
-          return;
-        }
-        changed.wait(lock);
-        continue;
-      }
-      in_progress[point] = true;
-      ++running;
-      // Warm starts: the neighbours feasible since the last try first, each group nearest first.
-      const std::uint32_t now = feasibleNeighbours(point), fresh = now & ~tried_from[point];
-      const bool retry = table.entries[point].solved;
-      tried_from[point] = now;
-      const std::vector<int> around = neighbours(grid, point);
-      std::vector<int> starts;
-      for (size_t k = 0; k < around.size(); ++k)
-        if (now >> k & 1) starts.push_back(static_cast<int>(k));
-      std::sort(starts.begin(), starts.end(), [&](int a, int b) {
-        const bool fa = fresh >> a & 1, fb = fresh >> b & 1;
-        if (fa != fb) return fa;
-        return gridDistance(grid, around[a], point) < gridDistance(grid, around[b], point);
-      });
-      for (int& k : starts) k = around[k];
-      std::vector<kw::gait::Gait> warm;
-      if (seed_gaits[point] && !retry) warm.push_back(*seed_gaits[point]);
-      for (int n : starts) warm.push_back(table.entries[n].gait);
-      lock.unlock();
-
-      // Warm starts from the nearest solved neighbours; the least effort among feasible ones.
-      const kw::gait::GaitTarget target = grid.target(point);
-      kw::optimizer::OptimalGait best;
-      bool found = false;
-      int evaluations = 0;
-      for (size_t a = 0; a < warm.size() && static_cast<int>(a) < max_attempts; ++a) {
-        const kw::optimizer::OptimalGait gait = kw::optimizer::optimizeGait(proportions, target, warm[a], options);
-        evaluations += gait.evaluations;
-        if (gait.feasible() && (!found || gait.effort < best.effort)) {
-          best = gait;
-          found = true;
-        } else if (!found && a == 0) {
-          best = gait;
-        }
-        if (found) break;
-      }
-      // Failing that, continue from the nearest neighbour through the midpoint target.
-      const size_t nearest = seed_gaits[point] && !retry ? 1 : 0;
-      if (!found && warm.size() > nearest) {
-        const kw::gait::Gait& neighbour = warm[nearest];
-        const kw::gait::GaitTarget& from = neighbour.target;
-        const kw::gait::GaitTarget middle{0.5 * (from.speed + target.speed),
-                                    0.5 * (from.step_length + target.step_length),
-                                    0.5 * (from.slope + target.slope)};
-        const kw::optimizer::OptimalGait half = kw::optimizer::optimizeGait(proportions, middle, neighbour, options);
-        evaluations += half.evaluations;
-        if (half.feasible()) {
-          const kw::optimizer::OptimalGait gait = kw::optimizer::optimizeGait(proportions, target, half, options);
-          evaluations += gait.evaluations;
-          if (gait.feasible()) {
-            best = gait;
-            found = true;
-          }
-        }
-      }
-      best.evaluations = evaluations;
-
-      lock.lock();
-      table.entries[point] = kw::optimizer::tableEntry(best);
-      in_progress[point] = false;
-      --running;
-      writeAtomically(out, table);
-      progress();
-      changed.notify_all();
-    }
-  };
-
-  progress();
-  // `threads` workers take points from the shared schedule until none is left.
-  kw::common::parallelFor(threads, threads, [&](int begin, int end) {
-    for (int w = begin; w < end; ++w) worker();
-  }, 1);
+  kw::optimizer::GrowthProgress before{0, 0, grid.size()};
+  for (const auto& e : table.entries) before.solved += e.solved, before.feasible += e.feasible;
+  progress(before);
+  kw::optimizer::growTable(table, options, growth,
+                           [&](const kw::gait::GaitTable& grown, const kw::optimizer::GrowthProgress& p) {
+                             writeAtomically(out, grown);
+                             progress(p);
+                           });
 
   // Written here too: a resume that solved no point may still have re-marked stale gaits or
   // regridded the table, and the workers only write after solving one.
