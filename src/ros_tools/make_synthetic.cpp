@@ -9,6 +9,8 @@
 //   NAME.bag                    /camera/image_raw (sensor_msgs/Image, bgr8),
 //                               /camera/camera_info, /tf_static (world -> camera_optical)
 //   NAME_ground_truth.csv       frame,stamp,joint,x,y,z: REP 155 joints, metres, world frame
+//   NAME_boxes.csv              frame,x1,y1,x2,y2,score: the drawn person's image box, px (as
+//                               a person detector's boxes: where a user would start the track)
 //   NAME_camera.yml             the calibration (world units mm, as the PETS file) and the
 //                               ground plane: ground_point_mm, ground_slope_rad,
 //                               ground_uphill_heading_rad
@@ -21,6 +23,7 @@
 #include <CLI/CLI.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <ros/package.h>
 #include <ros/time.h>
@@ -184,11 +187,16 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   }
 
   const std::string stem = s.out_dir + "/" + s.name;
-  outputs = {stem + ".bag", stem + "_ground_truth.csv", stem + ".avi", stem + "_camera.yml"};
+  outputs = {stem + ".bag", stem + "_ground_truth.csv", stem + ".avi", stem + "_camera.yml", stem + "_boxes.csv"};
   rosbag::Bag bag(stem + ".bag", rosbag::bagmode::Write);
   std::ofstream csv(stem + "_ground_truth.csv");
   if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write");
   csv << "frame,stamp,joint,x,y,z\n" << std::fixed;
+  // The drawn person's image box per frame (all of them, an occluder notwithstanding), as a
+  // person detector's boxes (track_offline --boxes, --init-box): a box to start from.
+  std::ofstream boxes(stem + "_boxes.csv");
+  if (!boxes) throw std::runtime_error(stem + "_boxes.csv: cannot write");
+  boxes << "frame,x1,y1,x2,y2,score\n";
   cv::VideoWriter video(stem + ".avi", cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
                         options.fps, cv::Size(camera.width(), camera.height()));
   if (!video.isOpened()) throw std::runtime_error(stem + ".avi: cannot write the video");
@@ -202,6 +210,13 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
     const kw::synthetic::SyntheticFrame& frame = walk.frames[i];
     cv::Mat image = scene.clone();
     kw::synthetic::drawPerson(image, camera, frame.pose, shape, kw::synthetic::PersonAppearance{});
+    {
+      cv::Mat changed;
+      cv::absdiff(image, scene, changed);
+      cv::cvtColor(changed, changed, cv::COLOR_BGR2GRAY);
+      const cv::Rect box = cv::boundingRect(changed > 0);
+      if (!box.empty()) boxes << i << ',' << box.x << ',' << box.y << ',' << box.x + box.width << ',' << box.y + box.height << ",1\n";
+    }
     if (s.occluder) kw::synthetic::drawOccluder(image, camera, occluder, frame.time_s);
     kw::synthetic::addSensorNoise(image, s.noise_sigma, options.seed * 1000003u + i);
 
@@ -222,7 +237,8 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   }
   bag.close();
   csv.close();
-  if (!csv) throw std::runtime_error(stem + "_ground_truth.csv: cannot write (disk full?)");
+  boxes.close();
+  if (!csv || !boxes) throw std::runtime_error(stem + "_ground_truth.csv, _boxes.csv: cannot write (disk full?)");
   if (!walk.gait_note.empty()) std::fprintf(stderr, "make_synthetic: %s\n", walk.gait_note.c_str());
   if (s.norms.empty()) {
     char gait[96];
@@ -242,8 +258,8 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
                 s.end_speed_kmh > 0 ? s.end_speed_kmh : options.speed_kmh, meanStepLength(walk),
                 options.slope_rad, options.heading_rad, static_cast<unsigned long long>(options.seed));
   }
-  std::printf("person %.0f-%.0f px tall; wrote %s.bag, %s_ground_truth.csv, %s_camera.yml, %s.avi\n",
-              smallest_px, largest_px, stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
+  std::printf("person %.0f-%.0f px tall; wrote %s.bag, %s_ground_truth.csv, %s_boxes.csv, %s_camera.yml, %s.avi\n",
+              smallest_px, largest_px, stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
   return 0;
 }
 

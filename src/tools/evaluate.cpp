@@ -5,6 +5,11 @@
 //   mean_joint_error_mm=     mean Euclidean joint error, world frame (MPJPE, global)
 //   root_relative_error_mm=  the same with each pose's mid-hip (waist) subtracted
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150)
+//   depth_bias_mm=           with --ground (the calibration: the camera's position), the mean
+//                            signed error of the waist's distance to the camera (positive: the
+//                            body placed too far), and lateral_error_mm= the mean error of the
+//                            waist across the camera's horizontal line of sight to it: depth and
+//                            sideways errors told apart (from a low camera depth is the weak one)
 //   footskate_mm=            mean slip of the estimated stance foot along the ground between
 //                            adjacent frames: the walker's rolling foot, recovered from knee and
 //                            ankle (body::rollingFoot), moves by −R·Δφ as it rolls; what it moves
@@ -22,8 +27,8 @@
 //                            the paper's Fig. 5 findings (more of both walking uphill)
 // and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
 //
-//   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--body ID] [--ground CAMERA.yml] [--lost-mm 150]
-//          [--height 1.75] [--walker-model config/walker_model.yaml]
+//   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--body ID] [--ground CAMERA.yml [--camera-unit 0.001]]
+//          [--lost-mm 150] [--height 1.75] [--walker-model config/walker_model.yaml]
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -37,6 +42,7 @@
 #include <string>
 
 #include "kneed_walker/core/body/body_model.h"
+#include "kneed_walker/core/vision/camera.h"
 #include "kneed_walker/core/vision/ground_plane.h"
 #include "options.h"
 #include "package_files.h"
@@ -92,13 +98,15 @@ std::map<int, Pose> readPoses(const std::string& path, const std::string& body) 
 int main(int argc, char** argv) {
   CLI::App app{"Joint errors, lost frames, foot skate and ground penetration of a track against ground truth."};
   std::string truth_path, estimate_path, ground_path, body;
-  double lost_mm = 150, contact_mm = 5, height_m = 1.75;
+  double lost_mm = 150, contact_mm = 5, height_m = 1.75, camera_unit_m = 0.001;
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("truth", truth_path, "ground truth CSV")->required()->check(CLI::ExistingFile);
   app.add_option("estimate", estimate_path, "estimate CSV")->required()->check(CLI::ExistingFile);
   app.add_option("--body", body, "the estimate's body (its body column) to evaluate; needed when it has several");
   app.add_option("--ground", ground_path, "calibration file with the ground plane (default: level Z = 0)")
       ->check(CLI::ExistingFile);
+  app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t (with --ground)")
+      ->capture_default_str()->check(FiniteRange(1e-6, 1e3));
   app.add_option("--lost-mm", lost_mm, "a frame whose mean joint error exceeds this is lost")->capture_default_str()
       ->check(FiniteRange(1e-3, 1e6));
   app.add_option("--contact-mm", contact_mm, "a sole within this of the ground is on it")
@@ -137,6 +145,23 @@ int main(int argc, char** argv) {
       lost += 1000 * frame_sum / frame_count > lost_mm;
     }
     if (frames == 0) throw std::runtime_error("no frame with common joints in both files");
+    // The waist's error along and across the camera's horizontal line of sight to the truth.
+    double depth_sum = 0, lateral_sum = 0;
+    int sight_frames = 0;
+    if (!ground_path.empty()) {
+      const Eigen::Vector3d camera = kw::vision::Camera::load(ground_path, camera_unit_m).centre();
+      for (const auto& [frame, t] : truth) {
+        const auto e = estimate.find(frame);
+        if (e == estimate.end() || !t.count("waist") || !e->second.count("waist")) continue;
+        const Eigen::Vector3d& true_waist = t.at("waist");
+        const Eigen::Vector3d& estimated_waist = e->second.at("waist");
+        depth_sum += (estimated_waist - camera).norm() - (true_waist - camera).norm();
+        const Eigen::Vector2d sight = (true_waist - camera).head<2>().normalized();
+        const Eigen::Vector2d error = (estimated_waist - true_waist).head<2>();
+        lateral_sum += std::abs(sight.x() * error.y() - sight.y() * error.x());
+        ++sight_frames;
+      }
+    }
     // Foot skate and penetration, of the estimate and (for reference) of the truth.
     const kw::body::FootGeometry foot =
         kw::body::FootGeometry::of(kw::dynamics::loadBodyProportions(walker_model), height_m);
@@ -210,6 +235,9 @@ int main(int argc, char** argv) {
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);
     std::printf("root_relative_error_mm=%.1f\n", 1000 * root_sum / count);
     std::printf("lost_frames=%d\n", lost);
+    if (sight_frames > 0)
+      std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\n", 1000 * depth_sum / sight_frames,
+                  1000 * lateral_sum / sight_frames);
     std::printf("footskate_mm=%.2f\n", estimated.skate_mm);
     std::printf("ground_penetration_mm=%.2f\n", estimated.penetration_mm);
     std::printf("truth_footskate_mm=%.2f\n", true_contact.skate_mm);

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -93,7 +94,8 @@ TEST(MakeSynthetic, SameSeedGivesIdenticalFiles) {
   ASSERT_EQ(run(common + " --seed 3 --out-dir " + (base / "a").string()), 0);
   ASSERT_EQ(run(common + " --seed 3 --out-dir " + (base / "b").string()), 0);
   ASSERT_EQ(run(common + " --seed 4 --out-dir " + (base / "c").string()), 0);
-  for (const char* file : {"synthetic.bag", "synthetic_ground_truth.csv", "synthetic_camera.yml", "synthetic.avi"}) {
+  for (const char* file :
+       {"synthetic.bag", "synthetic_ground_truth.csv", "synthetic_boxes.csv", "synthetic_camera.yml", "synthetic.avi"}) {
     const std::string a = fileBytes((base / "a" / file).string()), b = fileBytes((base / "b" / file).string());
     EXPECT_GT(a.size(), 0u) << file;
     EXPECT_EQ(a, b) << file << " differs between two runs with the same seed";
@@ -153,6 +155,29 @@ TEST(SyntheticSequences, AreCompleteAndConsistent) {
       ASSERT_TRUE(a && b) << joint;
       EXPECT_LT((*a - *b).norm(), 1e-6) << joint;
     }
+    // The person's box in each frame holds every joint as the camera sees it (the joints lie
+    // inside the drawn limbs), and is no more than a body's breadth wider than they are.
+    std::ifstream boxes(kSequences + "/" + name + "_boxes.csv");
+    std::string line;
+    ASSERT_TRUE(std::getline(boxes, line) && line == "frame,x1,y1,x2,y2,score") << name;
+    size_t rows = 0;
+    for (; std::getline(boxes, line); ++rows) {
+      int frame = 0;
+      double x1 = 0, y1 = 0, x2 = 0, y2 = 0;
+      ASSERT_EQ(std::sscanf(line.c_str(), "%d,%lf,%lf,%lf,%lf", &frame, &x1, &y1, &x2, &y2), 5) << line;
+      ASSERT_EQ(frame, static_cast<int>(rows)) << name;
+      double joints_left = 1e9, joints_right = -1e9;
+      for (const auto& [joint, position] : s.joints[frame]) {
+        const auto px = file_camera.project(position);
+        ASSERT_TRUE(px) << joint;
+        EXPECT_TRUE(px->x() >= x1 && px->x() <= x2 && px->y() >= y1 && px->y() <= y2)
+            << name << " frame " << frame << ": " << joint << " at " << px->transpose() << " outside " << line;
+        joints_left = std::min(joints_left, px->x());
+        joints_right = std::max(joints_right, px->x());
+      }
+      EXPECT_LT((x2 - x1) - (joints_right - joints_left), 0.4 * (y2 - y1)) << name << " frame " << frame << ": " << line;
+    }
+    EXPECT_EQ(rows, s.joints.size()) << name;
     const double head_above_ankles =
         s.joints.front().at("head").z() -
         0.5 * (s.joints.front().at("l_ankle").z() + s.joints.front().at("r_ankle").z());
