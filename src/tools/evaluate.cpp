@@ -4,7 +4,9 @@
 // --body when the file has several). Prints, over the frames and REP 155 joints present in both:
 //   mean_joint_error_mm=     mean Euclidean joint error, world frame (MPJPE, global)
 //   root_relative_error_mm=  the same with each pose's mid-hip (waist) subtracted
-//   lost_frames=             frames whose mean joint error exceeds --lost-mm (150)
+//   estimated_frames=N/M     the truth's frames that the estimate has (the figures are over them)
+//   lost_frames=             frames whose mean joint error exceeds --lost-mm (150), and the
+//                            truth's frames the estimate does not have
 //   depth_bias_mm=           with --ground (the calibration: the camera's position), the mean
 //                            signed error of the waist's distance to the camera (positive: the
 //                            body placed too far), and lateral_error_mm= the mean error of the
@@ -38,6 +40,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -74,13 +77,21 @@ std::map<int, Pose> readPoses(const std::string& path, const std::string& body) 
         (has_bodies && (!std::getline(fields, id, ',') || id.empty())))
       throw std::runtime_error(path + ":" + std::to_string(number) + ": expected frame,stamp,joint,x,y,z" +
                                (has_bodies ? ",body" : ""));
+    Eigen::Vector3d p;
+    int frame_number = 0;
     try {
-      const Eigen::Vector3d p(std::stod(x), std::stod(y), std::stod(z));
+      p = Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z));
+      frame_number = std::stoi(frame);
       if (!p.allFinite()) throw std::invalid_argument("not finite");
-      bodies[id][std::stoi(frame)][joint] = p;
     } catch (const std::exception&) {
       throw std::runtime_error(path + ":" + std::to_string(number) + ": not numbers: " + line);
     }
+    // A joint given twice for a frame: the same position is a repeat; another is a conflict
+    // that no figure could be trusted with.
+    const auto [it, added] = bodies[id][frame_number].emplace(joint, p);
+    if (!added && it->second != p)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": frame " + frame + " " + joint +
+                               (has_bodies ? " of body " + id : "") + " again, at another position");
   }
   std::string ids;
   for (const auto& [id, poses] : bodies) ids += (ids.empty() ? "" : ", ") + id;
@@ -145,6 +156,9 @@ int main(int argc, char** argv) {
       lost += 1000 * frame_sum / frame_count > lost_mm;
     }
     if (frames == 0) throw std::runtime_error("no frame with common joints in both files");
+    // A truth frame the estimate does not have (a lost track's gap) is lost too.
+    const int missing = static_cast<int>(truth.size()) - frames;
+    lost += missing;
     // The waist's error along and across the camera's horizontal line of sight to the truth.
     double depth_sum = 0, lateral_sum = 0;
     int sight_frames = 0;
@@ -166,9 +180,9 @@ int main(int argc, char** argv) {
     const kw::body::FootGeometry foot =
         kw::body::FootGeometry::of(kw::dynamics::loadBodyProportions(walker_model), height_m);
     const Eigen::Vector3d up = ground.normal();
+    // Each figure is empty when nothing could be measured (printed as n/a, never as 0).
     struct Contact {
-      double skate_mm = 0, penetration_mm = 0;
-      double lean_deg = 0, knee_at_contact_deg = 0;
+      std::optional<double> skate_mm, penetration_mm, lean_deg, knee_at_contact_deg;
       int landings = 0;
     };
     auto contact = [&](const std::map<int, Pose>& poses) {
@@ -225,27 +239,47 @@ int main(int argc, char** argv) {
         previous = now;
       }
       constexpr double kDeg = 180 / M_PI;
-      return Contact{skate_count ? 1000 * skate / skate_count : 0.0,
-                     penetration_count ? 1000 * penetration / penetration_count : 0.0,
-                     lean_count ? kDeg * lean / lean_count : 0.0, landings ? kDeg * knee_at_contact / landings : 0.0,
-                     landings};
+      auto mean = [](double sum, int n, double scale) {
+        return n > 0 ? std::optional<double>(scale * sum / n) : std::nullopt;
+      };
+      return Contact{mean(skate, skate_count, 1000), mean(penetration, penetration_count, 1000),
+                     mean(lean, lean_count, kDeg), mean(knee_at_contact, landings, kDeg), landings};
     };
     const Contact estimated = contact(estimate), true_contact = contact(truth);
     std::printf("frames=%d joints=%d\n", frames, count / frames);
+    std::printf("estimated_frames=%d/%zu\n", frames, truth.size());
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);
     std::printf("root_relative_error_mm=%.1f\n", 1000 * root_sum / count);
     std::printf("lost_frames=%d\n", lost);
     if (sight_frames > 0)
       std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\n", 1000 * depth_sum / sight_frames,
                   1000 * lateral_sum / sight_frames);
-    std::printf("footskate_mm=%.2f\n", estimated.skate_mm);
-    std::printf("ground_penetration_mm=%.2f\n", estimated.penetration_mm);
-    std::printf("truth_footskate_mm=%.2f\n", true_contact.skate_mm);
-    std::printf("truth_ground_penetration_mm=%.2f\n", true_contact.penetration_mm);
-    std::printf("torso_lean_deg=%.2f\n", estimated.lean_deg);
-    std::printf("truth_torso_lean_deg=%.2f\n", true_contact.lean_deg);
-    std::printf("knee_at_contact_deg=%.2f (%d landings)\n", estimated.knee_at_contact_deg, estimated.landings);
-    std::printf("truth_knee_at_contact_deg=%.2f (%d landings)\n", true_contact.knee_at_contact_deg, true_contact.landings);
+    // A figure, or n/a and why.
+    auto figure = [](const char* name, const std::optional<double>& value, const char* why) {
+      if (value)
+        std::printf("%s=%.2f\n", name, *value);
+      else
+        std::printf("%s=n/a (%s)\n", name, why);
+    };
+    constexpr const char* kNoStance = "no foot on the ground in two adjacent frames";
+    constexpr const char* kNoLegs = "no frame with both legs' hips, knees and ankles";
+    constexpr const char* kNoTorso = "no frame with the legs, waist and neck";
+    figure("footskate_mm", estimated.skate_mm, kNoStance);
+    figure("ground_penetration_mm", estimated.penetration_mm, kNoLegs);
+    figure("truth_footskate_mm", true_contact.skate_mm, kNoStance);
+    figure("truth_ground_penetration_mm", true_contact.penetration_mm, kNoLegs);
+    figure("torso_lean_deg", estimated.lean_deg, kNoTorso);
+    figure("truth_torso_lean_deg", true_contact.lean_deg, kNoTorso);
+    const std::string estimated_landings = "(" + std::to_string(estimated.landings) + " landings)";
+    const std::string true_landings = "(" + std::to_string(true_contact.landings) + " landings)";
+    if (estimated.knee_at_contact_deg)
+      std::printf("knee_at_contact_deg=%.2f %s\n", *estimated.knee_at_contact_deg, estimated_landings.c_str());
+    else
+      std::printf("knee_at_contact_deg=n/a (no landing: no foot came down in adjacent frames)\n");
+    if (true_contact.knee_at_contact_deg)
+      std::printf("truth_knee_at_contact_deg=%.2f %s\n", *true_contact.knee_at_contact_deg, true_landings.c_str());
+    else
+      std::printf("truth_knee_at_contact_deg=n/a (no landing: no foot came down in adjacent frames)\n");
     for (const auto& [joint, e] : per_joint) std::printf("error_mm_%s=%.1f\n", joint.c_str(), 1000 * e.first / e.second);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());
