@@ -171,7 +171,9 @@ void TrackerNodelet::onInit() {
                                            kw::dynamics::loadBodyProportions(orPackage(config_.ros.walker_model, "walker_model.yaml")));
     prior_options_ = kw::prior::loadPriorOptions(orPackage(config_.ros.prior_config, "prior.yaml"));
     if (!config_.ros.camera_file.empty()) {
-      file_camera_ = kw::vision::Camera::load(config_.ros.camera_file, config_.ros.camera_file_unit_m);
+      std::string warning;
+      file_camera_ = kw::vision::Camera::load(config_.ros.camera_file, config_.ros.camera_file_unit_m, &warning);
+      if (!warning.empty()) NODELET_WARN("~camera_file: %s", warning.c_str());
       file_ground_ = kw::vision::loadGroundPlane(config_.ros.camera_file);
       config_.tracker.ground_slope_rad = file_ground_.slope_rad;
     }

@@ -44,6 +44,7 @@
 #include "kneed_walker/core/vision/background.h"
 #include "kneed_walker/ros/bag_writing.h"
 #include "kneed_walker/ros/conversions.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 
@@ -143,7 +144,7 @@ double meanStepLength(const kw::synthetic::SyntheticWalk& walk) {
 
 // Writes the sequence; `outputs` receives the files it creates, so that a failure can remove them.
 int run(const Settings& s, std::vector<std::string>& outputs) {
-  const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
+  const kw::vision::Camera camera = kneed_walker::tools::loadCamera("make_synthetic", s.camera_path, s.camera_unit_m);
   kw::synthetic::SyntheticWalkOptions options = s.walk;
   if (s.end_speed_kmh > 0) options.end_speed_kmh = s.end_speed_kmh;
   if (s.end_step_m > 0) options.end_step_length_m = s.end_step_m;

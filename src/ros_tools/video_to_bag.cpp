@@ -24,6 +24,7 @@
 #include "options.h"
 #include "kneed_walker/ros/bag_writing.h"
 #include "kneed_walker/ros/conversions.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 
@@ -37,7 +38,7 @@ struct Settings {
 
 // Returns the frames written.
 int convert(const Settings& s) {
-  const kw::vision::Camera camera = kw::vision::Camera::load(s.camera_path, s.camera_unit_m);
+  const kw::vision::Camera camera = kneed_walker::tools::loadCamera("video_to_bag", s.camera_path, s.camera_unit_m);
   cv::VideoCapture video(s.video);
   if (!video.isOpened()) throw std::runtime_error("--video: cannot open " + s.video);
   cv::Mat image;

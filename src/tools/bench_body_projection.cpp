@@ -20,6 +20,7 @@
 #include "kneed_walker/core/synthetic/synthetic_walk.h"
 #include "options.h"
 #include "package_files.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 using kneed_walker::tools::median;
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "timed repeats; the median is reported")->check(CLI::Range(1, 1000));
   CLI11_PARSE(app, argc, argv);
   try {
-    const kw::vision::Camera camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    const kw::vision::Camera camera = kneed_walker::tools::loadCamera("bench_body_projection", camera_path, camera_unit_m);
     // Walking states and placements from a long synthetic walk in view of the camera.
     kw::synthetic::SyntheticWalkOptions walk_options;
     walk_options.start_m = camera.groundPoint({0.5 * camera.width(), 0.75 * camera.height()})->head<2>();

@@ -26,6 +26,7 @@
 #include "median.h"
 #include "options.h"
 #include "package_files.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 using kneed_walker::tools::FiniteRange;
@@ -50,7 +51,7 @@ int main(int argc, char** argv) {
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
-    const kw::vision::Camera camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    const kw::vision::Camera camera = kneed_walker::tools::loadCamera("bench_tracker", camera_path, camera_unit_m);
     const kw::gait::GaitTable table = kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     const kw::prior::PriorOptions prior = kw::prior::loadPriorOptions(prior_path);
     kw::synthetic::SyntheticWalkOptions walk_options;

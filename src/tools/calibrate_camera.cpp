@@ -1,7 +1,7 @@
 // calibrate_camera: your own static camera's calibration for the tracker, from its intrinsics
 // and four or more marks on the ground whose positions you measured.
 //
-//   rosrun kneed_walker calibrate_camera --intrinsics camera_info.yaml --points marks.csv \
+//   rosrun kneed_walker calibrate_camera --intrinsics camera_info.yaml --points marks.csv   (one line)
 //          --out my_camera.yml [--check frame.png --check-out check.png --person 2 3]
 //   rosrun kneed_walker calibrate_camera --camera my_camera.yml --check frame.png --check-out check.png
 //
@@ -34,6 +34,7 @@
 #include "kneed_walker/core/vision/camera_calibration.h"
 #include "options.h"
 #include "tool_main.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 using kneed_walker::tools::FiniteRange;
@@ -188,7 +189,7 @@ int run(int argc, char** argv) {
   std::vector<kw::vision::GroundPointObservation> marks;
   std::optional<kw::vision::Camera> camera;
   if (!camera_path.empty()) {
-    camera = kw::vision::Camera::load(camera_path, camera_unit_m);
+    camera = kneed_walker::tools::loadCamera("calibrate_camera", camera_path, camera_unit_m);
   } else {
     const kw::vision::CameraIntrinsics intrinsics = kw::vision::loadCameraIntrinsics(intrinsics_path);
     marks = kw::vision::loadGroundPoints(points_path);

@@ -49,6 +49,7 @@
 #include "kneed_walker/core/vision/ground_plane.h"
 #include "options.h"
 #include "package_files.h"
+#include "camera_file.h"
 
 namespace kw = kneed_walker::core;
 using kneed_walker::tools::FiniteRange;
@@ -163,7 +164,7 @@ int main(int argc, char** argv) {
     double depth_sum = 0, lateral_sum = 0;
     int sight_frames = 0;
     if (!ground_path.empty()) {
-      const Eigen::Vector3d camera = kw::vision::Camera::load(ground_path, camera_unit_m).centre();
+      const Eigen::Vector3d camera = kneed_walker::tools::loadCamera("evaluate", ground_path, camera_unit_m).centre();
       for (const auto& [frame, t] : truth) {
         const auto e = estimate.find(frame);
         if (e == estimate.end() || !t.count("waist") || !e->second.count("waist")) continue;

@@ -4,8 +4,10 @@
 #include <opencv2/core/eigen.hpp>
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "kneed_walker/core/common/config_file.h"
@@ -45,7 +47,7 @@ Camera::Camera(const Eigen::Matrix3d& intrinsics, const std::vector<double>& dis
     throw std::invalid_argument("camera image size must be positive");
 }
 
-Camera Camera::load(const std::string& path, double file_length_unit_m) {
+Camera Camera::load(const std::string& path, double file_length_unit_m, std::string* warning) {
   if (!(file_length_unit_m > 0)) throw std::invalid_argument("file_length_unit_m must be > 0");
   common::ConfigFile file(path, "calibration");
   cv::Mat k, d, r, t;
@@ -68,6 +70,21 @@ Camera Camera::load(const std::string& path, double file_length_unit_m) {
   cv::cv2eigen(k, intrinsics);
   cv::cv2eigen(r, rotation);
   const std::vector<double> distortion(d.begin<double>(), d.end<double>());
+  if (rotation.allFinite() && rotation.determinant() > 0) {
+    const double error = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm();
+    char size[64];
+    std::snprintf(size, sizeof size, "%.2g", error);
+    if (error > kRotationTolerance)
+      throw std::invalid_argument(path + ": R is not a rotation: |R^T R - I| = " + size + ", more than the " +
+                                  "1e-4 that rounding explains; write R to at least 6 decimals (calibrate_camera does)");
+    if (error > 1e-9) {
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      rotation = svd.matrixU() * svd.matrixV().transpose();  // the nearest rotation
+      if (warning && error > 1e-6)
+        *warning = path + ": R is a rotation only to |R^T R - I| = " + size +
+                   " (rounded?): the nearest rotation is used";
+    }
+  }
   const Eigen::Vector3d translation =
       Eigen::Vector3d(t.at<double>(0), t.at<double>(1), t.at<double>(2)) * file_length_unit_m;
   try {

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "kneed_walker/ros/conversions.h"
+#include "camera_file.h"
 
 namespace kneed_walker::tools::track_offline {
 
@@ -106,14 +107,14 @@ Input openInput(const InputOptions& options) {
     auto bag = std::make_unique<BagSource>(options.bag_path, options.image_topic);
     kw::vision::Camera camera = options.camera_path.empty()
                                     ? bagCamera(bag->bag(), options.info_topic, options.world_frame)
-                                    : kw::vision::Camera::load(options.camera_path, options.camera_unit_m);
+                                    : kneed_walker::tools::loadCamera("track_offline", options.camera_path, options.camera_unit_m);
     const kw::vision::GroundPlane ground =
         options.camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(options.camera_path);
     return Input{std::move(bag), std::move(camera), ground};
   }
   if (options.camera_path.empty()) throw std::runtime_error("--video needs --camera");
   auto video = std::make_unique<VideoSource>(options.video_path, options.fps);
-  return Input{std::move(video), kw::vision::Camera::load(options.camera_path, options.camera_unit_m),
+  return Input{std::move(video), kneed_walker::tools::loadCamera("track_offline", options.camera_path, options.camera_unit_m),
                kw::vision::loadGroundPlane(options.camera_path)};
 }
 

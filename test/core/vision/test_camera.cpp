@@ -4,6 +4,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -177,6 +178,49 @@ TEST(Camera, RaysInvertProjection) {
     ASSERT_TRUE(back.has_value());
     EXPECT_LT((*back - pixels[i]).norm(), 1e-6);
   }
+}
+
+// The PETS calibration with its R rounded to `decimals`, written to a file.
+std::string petsWithRoundedRotation(int decimals) {
+  const Camera pets = petsCamera();
+  const std::string path = ::testing::TempDir() + "/kneed_walker_rounded_" + std::to_string(decimals) + ".yml";
+  pets.save(path, 0.001);
+  cv::FileStorage file(path, cv::FileStorage::APPEND);
+  const double scale = std::pow(10.0, decimals);
+  Eigen::Matrix3d rounded = pets.rotation();
+  for (int i = 0; i < 9; ++i) rounded(i) = std::round(rounded(i) * scale) / scale;
+  cv::Mat r;
+  cv::eigen2cv(rounded, r);
+  file.release();
+  // FileStorage cannot replace a key: the file is written again with the rounded R.
+  cv::FileStorage in(path, cv::FileStorage::READ), out(path + ".rounded.yml", cv::FileStorage::WRITE);
+  for (const char* key : {"camera_matrix", "distortion_coefficients", "t"}) {
+    cv::Mat m;
+    in[key] >> m;
+    out << key << m;
+  }
+  out << "R" << r << "image_width" << static_cast<int>(in["image_width"]) << "image_height"
+      << static_cast<int>(in["image_height"]);
+  return path + ".rounded.yml";
+}
+
+// Real calibrations write R to a few decimals: to 5 (|RᵀR − I| about 1e-5) it is taken as the
+// nearest rotation, with a warning that gives the error; to 2 it is refused with the error.
+TEST(Camera, RoundedRotationsAreTakenOrRefusedBySize) {
+  std::string warning;
+  const Camera five = Camera::load(petsWithRoundedRotation(5), 0.001, &warning);
+  EXPECT_NE(warning.find("|R^T R - I| = "), std::string::npos) << warning;
+  EXPECT_LT((five.rotation().transpose() * five.rotation() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_LT((five.rotation() - petsCamera().rotation()).norm(), 1e-4);
+  try {
+    Camera::load(petsWithRoundedRotation(2), 0.001);
+    FAIL() << "an R rounded to 2 decimals was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("R is not a rotation: |R^T R - I| = "), std::string::npos) << e.what();
+  }
+  warning.clear();
+  Camera::load(kPets + "/View_001_camera.yml", 0.001, &warning);
+  EXPECT_EQ(warning, "") << "the PETS file's R is a rotation to 1e-9";
 }
 
 TEST(Camera, BadCalibrationsAreRefusedWithTheReason) {

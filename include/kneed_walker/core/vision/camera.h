@@ -26,8 +26,12 @@ class Camera {
 
   // Reads OpenCV FileStorage YAML with camera_matrix, distortion_coefficients, R, t,
   // image_width, image_height; t is in `file_length_unit_m` metres per file unit (0.001 for
-  // the PETS calibration, which is in mm).
-  static Camera load(const std::string& path, double file_length_unit_m);
+  // the PETS calibration, which is in mm). Calibrations are often written to a few decimals:
+  // an R within kRotationTolerance of orthonormal (‖RᵀR − I‖, Frobenius) is made the nearest
+  // rotation, and `warning` (if given) says so with the size of the error; beyond, the file is
+  // refused with it.
+  static Camera load(const std::string& path, double file_length_unit_m, std::string* warning = nullptr);
+  static constexpr double kRotationTolerance = 1e-4;
   // Writes the same format (t in file units of file_length_unit_m metres); load reads it back.
   void save(const std::string& path, double file_length_unit_m) const;
   // The same keys into an open file, beside the caller's own.
