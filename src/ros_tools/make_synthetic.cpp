@@ -2,7 +2,8 @@
 // A person walks by the stochastic prior (paper §3.4) around a table gait (or, with --end-speed
 // and/or --end-step, around the gait of each stride's moment of a linear change), or by measured
 // joint-angle curves (--norms: the Schwartz 2008 gait norms, a motion the prior did not make;
-// synthetic/norm_walk.h), is rendered as the
+// synthetic/norm_walk.h) or by a motion capture (--bvh: ../shared/data/mocap's real walks,
+// drawn as a person unlike the body model, with arms; synthetic/captured_walk.h), is rendered as the
 // tracker's body model over a real background (the median of a video from the same static
 // camera) or a textured ground plane, with sensor noise and optionally an occluder crossing in
 // front. Writes into --out-dir:
@@ -36,9 +37,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include "options.h"
+#include "kneed_walker/core/synthetic/captured_walk.h"
 #include "kneed_walker/core/synthetic/norm_walk.h"
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/vision/background.h"
@@ -62,6 +65,8 @@ struct Settings {
   bool heading_given = false;
   double oblique_deg = 0;  // the default heading turned away from the camera by this
   std::string norms;       // drive the walk by these gait norms instead of the prior
+  std::string bvh;         // or play this motion capture, drawn as a person unlike the body model
+  double bvh_start_s = 0;  // from this time of the capture
   double end_speed_kmh = 0;  // the speed at the end (0: the start speed)
   double end_step_m = 0;     // by the prior: the step length at the end (0: the start's)
   double start_stamp_s = 1.7e9;
@@ -144,6 +149,8 @@ double meanStepLength(const kw::synthetic::SyntheticWalk& walk) {
 
 // Writes the sequence; `outputs` receives the files it creates, so that a failure can remove them.
 int run(const Settings& s, std::vector<std::string>& outputs) {
+  if (!s.bvh.empty() && s.walk.slope_rad != 0)
+    throw std::runtime_error("--slope: a --bvh capture is played on level ground");
   const kw::vision::Camera camera = kneed_walker::tools::loadCamera("make_synthetic", s.camera_path, s.camera_unit_m);
   kw::synthetic::SyntheticWalkOptions options = s.walk;
   if (s.end_speed_kmh > 0) options.end_speed_kmh = s.end_speed_kmh;
@@ -173,8 +180,37 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
     const double cross = direction.x() * from_camera.y() - direction.y() * from_camera.x();
     options.heading_rad += (cross > 0 ? 1.0 : -1.0) * turn;
   }
-  const kw::synthetic::SyntheticWalk walk = synthesize(s, options);
+  // A motion capture: its joints per frame, placed in the scene, and the truth's REP 155 joints.
+  std::optional<kw::synthetic::CapturedMotion> captured;
+  std::vector<std::vector<Eigen::Vector3d>> captured_joints;
+  const kw::synthetic::SyntheticWalk walk = s.bvh.empty() ? synthesize(s, options) : [&] {
+    try {
+      captured = kw::synthetic::loadBvh(s.bvh);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--bvh ") + e.what());
+    }
+    const double length_s = captured->frame_time_s * (captured->positions_m.size() - 1) - s.bvh_start_s;
+    if (length_s <= 0) throw std::runtime_error("--bvh-start lies past the capture's end");
+    const Eigen::Isometry3d place = kw::synthetic::placeCaptured(*captured, {options.start_m, options.heading_rad});
+    const Eigen::Vector3d forward(std::cos(options.heading_rad), std::sin(options.heading_rad), 0);
+    kw::synthetic::SyntheticWalk w;
+    const int frames = 1 + static_cast<int>(std::floor(std::min(options.duration_s, length_s) * options.fps + 1e-9));
+    double top_m = 0;
+    for (int i = 0; i < frames; ++i) {
+      std::vector<Eigen::Vector3d> joints = kw::synthetic::jointsAt(*captured, s.bvh_start_s + i / options.fps);
+      for (Eigen::Vector3d& p : joints) p = place * p;
+      kw::synthetic::SyntheticFrame frame;
+      frame.time_s = i / options.fps;
+      frame.pose = kw::synthetic::capturedBodyPose(*captured, joints, forward);
+      top_m = std::max(top_m, frame.pose.joints[kw::body::kHead].z());
+      w.frames.push_back(frame);
+      captured_joints.push_back(std::move(joints));
+    }
+    options.person_height_m = top_m + 0.11;  // the head's centre lies a head's radius below the crown
+    return w;
+  }();
   const kw::body::BodyShape shape = kw::body::BodyShape::forHeight(options.person_height_m);
+  const kw::synthetic::CapturedFigure figure = kw::synthetic::capturedFigure(options.seed);
   const cv::Mat scene = background(s, camera, walk.ground);
   const kw::synthetic::SyntheticFrame& middle = walk.frames[walk.frames.size() / 2];
   const kw::synthetic::Occluder occluder = kw::synthetic::crossingOccluder(
@@ -210,7 +246,10 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   for (size_t i = 0; i < walk.frames.size(); ++i) {
     const kw::synthetic::SyntheticFrame& frame = walk.frames[i];
     cv::Mat image = scene.clone();
-    kw::synthetic::drawPerson(image, camera, frame.pose, shape, kw::synthetic::PersonAppearance{});
+    if (captured)
+      kw::synthetic::drawCapturedPerson(image, camera, *captured, captured_joints[i], figure);
+    else
+      kw::synthetic::drawPerson(image, camera, frame.pose, shape, kw::synthetic::PersonAppearance{});
     {
       cv::Mat changed;
       cv::absdiff(image, scene, changed);
@@ -241,7 +280,12 @@ int run(const Settings& s, std::vector<std::string>& outputs) {
   boxes.close();
   if (!csv || !boxes) throw std::runtime_error(stem + "_ground_truth.csv, _boxes.csv: cannot write (disk full?)");
   if (!walk.gait_note.empty()) std::fprintf(stderr, "make_synthetic: %s\n", walk.gait_note.c_str());
-  if (s.norms.empty()) {
+  if (captured) {
+    std::printf("make_synthetic: %zu frames at %.1f fps, played from %s from %.2f s, heading %.3f rad, a person "
+                "%.2f m tall drawn %.2f times as broad as the body model, seed %llu\n",
+                walk.frames.size(), options.fps, s.bvh.c_str(), s.bvh_start_s, options.heading_rad,
+                options.person_height_m, figure.breadth_scale, static_cast<unsigned long long>(options.seed));
+  } else if (s.norms.empty()) {
     char gait[96];
     if (options.end_speed_kmh || options.end_step_length_m)
       std::snprintf(gait, sizeof gait, "%.2f to %.2f km/h, %.2f to %.2f m steps", options.speed_kmh,
@@ -282,7 +326,7 @@ std::string resolveFiles(const CLI::App& app, int argc, char** argv, Settings& s
   };
   const bool video_background = s.background != "textured";
   for (const PathOption& o : {PathOption{"--camera", &s.camera_path}, PathOption{"--background", &s.background},
-                              PathOption{"--norms", &s.norms}, PathOption{"--table", &s.table},
+                              PathOption{"--norms", &s.norms}, PathOption{"--bvh", &s.bvh}, PathOption{"--table", &s.table},
                               PathOption{"--prior", &s.prior}, PathOption{"--walker-model", &s.walker_model}}) {
     if (o.value->empty() || (o.value == &s.background && !video_background)) continue;
     if (app.count(o.name) > 0 && !on_command_line(o.name) && !config_dir.empty() &&
@@ -330,6 +374,13 @@ int main(int argc, char** argv) {
   auto* norms = app.add_option("--norms", s.norms,
                  "walk by these gait norms (Schwartz2008_Joint_Rotations.csv) instead of the prior: a motion the "
                  "prior did not make")->excludes(step);
+  auto* bvh = app.add_option("--bvh", s.bvh,
+                              "play this motion capture (BVH, cm, Y up: ../shared/data/mocap) instead of the prior, "
+                              "drawn as a person unlike the tracker's body model (breadth, arms, head and colours of "
+                              "--seed); on level ground, its speed and height its own")
+                  ->excludes(norms)->excludes(step);
+  app.add_option("--bvh-start", s.bvh_start_s, "with --bvh: start this far into the capture, s (past a standing start)")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0, 3600))->needs(bvh);
   app.add_option("--end-speed", s.end_speed_kmh,
                  "the speed at the end, km/h; the speed changes linearly from --speed (default: --speed); by the "
                  "prior, each stride walks the gait of its heel strike's moment")
