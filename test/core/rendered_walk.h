@@ -16,20 +16,25 @@
 namespace kneed_walker::core::test {
 
 struct RenderedWalk {
-  vision::Camera camera =
-      vision::Camera::load(std::string(KNEED_WALKER_SHARED_DIR) + "/data/pets2009/View_001_camera.yml", 0.001);
+  vision::Camera camera;
   synthetic::SyntheticWalk walk;
   std::optional<synthetic::SyntheticWalk> second;  // the second person's walk
   body::BodyShape shape = body::BodyShape::forHeight(1.75);
   std::vector<cv::Mat> frames;  // BGR, one per walk frame
   std::vector<cv::Mat> empty;   // the scene without the person, 8 noisy frames
 
-  RenderedWalk(double duration_s, double fps, std::uint64_t seed, bool two_people = false) {
+  // By default through the PETS camera; or through another calibration, walking from
+  // `start_px` (the ground there) in `heading_rad`.
+  RenderedWalk(double duration_s, double fps, std::uint64_t seed, bool two_people = false,
+               const std::string& camera_path = std::string(KNEED_WALKER_SHARED_DIR) +
+                                                "/data/pets2009/View_001_camera.yml",
+               const Eigen::Vector2d& start_px = {560, 470}, double heading_rad = 2.1)
+      : camera(vision::Camera::load(camera_path, 0.001)) {
     const gait::GaitTable table = gait::loadGaitTable(configFile("prior_gait_table.yaml"), shippedWalkerModel());
     const prior::PriorOptions prior = prior::loadPriorOptions(configFile("prior.yaml"));
     synthetic::SyntheticWalkOptions o;
-    o.start_m = camera.groundPoint({560, 470})->head<2>();
-    o.heading_rad = 2.1;
+    o.start_m = camera.groundPoint(start_px)->head<2>();
+    o.heading_rad = heading_rad;
     o.duration_s = duration_s;
     o.fps = fps;
     o.seed = seed;
