@@ -24,7 +24,7 @@ bool supportedEncoding(const std::string& encoding) {
 
 }  // namespace
 
-std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info) {
+std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info, bool needs_frame_id) {
   std::ostringstream problem;
   if (image.width == 0 || image.height == 0) {
     problem << "image is empty (" << image.width << "x" << image.height << ")";
@@ -40,10 +40,20 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
   } else if (info.width != image.width || info.height != image.height) {
     problem << "camera_info is for " << info.width << "x" << info.height << " images, image is "
             << image.width << "x" << image.height;
-  } else if (!(std::isfinite(info.K[0]) && info.K[0] > 0 && std::isfinite(info.K[4]) &&
-               info.K[4] > 0 && std::isfinite(info.K[2]) && std::isfinite(info.K[5]))) {
-    problem << "camera_info K has no valid focal length (fx = " << info.K[0]
-            << ", fy = " << info.K[4] << "): is the camera calibrated?";
+  } else if (const std::string info_problem = cameraInfoProblem(info); !info_problem.empty()) {
+    problem << info_problem;
+  } else if (needs_frame_id && image.header.frame_id.empty()) {
+    problem << "image header has no frame_id (needed to place the camera in tf)";
+  }
+  return problem.str();
+}
+
+std::string cameraInfoProblem(const sensor_msgs::CameraInfo& info) {
+  std::ostringstream problem;
+  if (!(std::isfinite(info.K[0]) && info.K[0] > 0 && std::isfinite(info.K[4]) && info.K[4] > 0 &&
+        std::isfinite(info.K[2]) && std::isfinite(info.K[5]))) {
+    problem << "camera_info K has no valid focal length (fx = " << info.K[0] << ", fy = " << info.K[4]
+            << "): is the camera calibrated?";
   } else if (!info.D.empty() && info.distortion_model != sensor_msgs::distortion_models::PLUMB_BOB &&
              info.distortion_model != sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL) {
     problem << "camera_info distortion model '" << info.distortion_model
@@ -55,8 +65,6 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
              (info.distortion_model == sensor_msgs::distortion_models::PLUMB_BOB && info.D.size() == 8)) {
     problem << "camera_info D has " << info.D.size() << " coefficients for model '" << info.distortion_model
             << "' (plumb_bob: 4 or 5, rational_polynomial: 8)";
-  } else if (image.header.frame_id.empty()) {
-    problem << "image header has no frame_id (needed to place the camera in tf)";
   }
   return problem.str();
 }

@@ -25,8 +25,14 @@ namespace kneed_walker::ros_glue {
 // Why an image + camera_info pair cannot be tracked on, or an empty string when it can:
 // empty or inconsistent image buffers, unsupported encodings, camera_info of another size,
 // non-positive or non-finite focal lengths, unknown distortion models, missing frame ids.
-// The nodelet skips and counts such frames instead of failing on them.
-std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info);
+// The nodelet and track_offline skip and count such frames instead of failing on them.
+// `needs_frame_id`: the camera is placed through tf by the image's frame id (false: the camera
+// comes from a calibration file).
+std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info,
+                         bool needs_frame_id = true);
+// The camera_info part of frameProblem: why the intrinsics cannot be used (focal lengths,
+// distortion model and coefficients), or an empty string.
+std::string cameraInfoProblem(const sensor_msgs::CameraInfo& info);
 
 // The intrinsics of a core camera as a CameraInfo (plumb_bob for up to 5 distortion
 // coefficients, rational_polynomial for 8; R identity; P = [K | 0], a monocular camera).

@@ -99,6 +99,8 @@ std::vector<std::string> problems(const Options& options) {
     found.push_back(cv::format("--ground-slope-rad %g: the calibration --camera %s gives the ground (its "
                                "ground_slope_rad, level when it has none); leave --ground-slope-rad out",
                                options.tracker.ground_slope_rad, options.input.camera_path.c_str()));
+  if (!options.input.bag_path.empty() && options.input.fps > 0)
+    found.push_back("--fps: a bag's frames carry their own stamps; --fps is for --video");
   const OutputOptions& output = options.output;
   if (!output.strip_path.empty() && output.strip_frames.empty()) found.push_back("--strip needs --strip-frames");
   if (!output.strip_path.empty() && !cv::haveImageWriter(output.strip_path))

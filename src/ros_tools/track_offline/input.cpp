@@ -31,9 +31,10 @@ class VideoSource : public FrameSource {
     if (!(fps_ > 0)) throw std::runtime_error(path_ + ": the video has no frame rate; give --fps");
     index_ = 0;
   }
-  bool next(cv::Mat& bgr, double& stamp_s) override {
-    if (!video_.read(bgr)) return false;
-    stamp_s = index_++ / fps_;
+  bool next(Frame& frame) override {
+    if (!video_.read(frame.bgr)) return false;
+    frame.stamp_s = index_++ / fps_;
+    frame.problem = frame.bgr.empty() || frame.bgr.type() != CV_8UC3 ? "the video's frame is empty or not 8-bit colour" : "";
     return true;
   }
   int count() const override { return static_cast<int>(video_.get(cv::CAP_PROP_FRAME_COUNT)); }
@@ -61,19 +62,22 @@ class BagSource : public FrameSource {
     view_ = std::make_unique<rosbag::View>(bag_, rosbag::TopicQuery(topic_));
     it_ = view_->begin();
   }
-  bool next(cv::Mat& bgr, double& stamp_s) override {
+  bool next(Frame& frame) override {
     for (; it_ != view_->end(); ++it_) {
       const sensor_msgs::Image::ConstPtr image = it_->instantiate<sensor_msgs::Image>();
       if (!image) continue;
-      bgr = cv_bridge::toCvCopy(image, "bgr8")->image;
-      stamp_s = image->header.stamp.toSec();
       ++it_;
+      frame.stamp_s = image->header.stamp.toSec();
+      frame.problem = kneed_walker::ros_glue::frameProblem(*image, info_, false);
+      frame.bgr = frame.problem.empty() ? cv_bridge::toCvCopy(image, "bgr8")->image : cv::Mat();
       return true;
     }
     return false;
   }
   int count() const override { return count_; }
   rosbag::Bag& bag() { return bag_; }
+  // The intrinsics each frame is checked against (their size, the camera's model).
+  void checkAgainst(const sensor_msgs::CameraInfo& info) { info_ = info; }
 
  private:
   std::string topic_;
@@ -81,6 +85,7 @@ class BagSource : public FrameSource {
   std::unique_ptr<rosbag::View> view_;
   rosbag::View::iterator it_;
   int count_ = 0;
+  sensor_msgs::CameraInfo info_;
 };
 
 // The camera of a bag: its first camera_info and the /tf_static transform to its frame.
@@ -89,6 +94,8 @@ kw::vision::Camera bagCamera(rosbag::Bag& bag, const std::string& info_topic, co
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(info_topic)))
     if ((info = m.instantiate<sensor_msgs::CameraInfo>())) break;
   if (!info) throw std::runtime_error("the bag has no camera_info on " + info_topic + "; give --camera");
+  if (const std::string problem = kneed_walker::ros_glue::cameraInfoProblem(*info); !problem.empty())
+    throw std::runtime_error("the bag's first " + info_topic + ": " + problem + "; give --camera");
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/tf_static"))) {
     const tf2_msgs::TFMessage::ConstPtr tf = m.instantiate<tf2_msgs::TFMessage>();
     if (!tf) continue;
@@ -110,6 +117,7 @@ Input openInput(const InputOptions& options) {
                                     : kneed_walker::tools::loadCamera("track_offline", options.camera_path, options.camera_unit_m);
     const kw::vision::GroundPlane ground =
         options.camera_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(options.camera_path);
+    bag->checkAgainst(kneed_walker::ros_glue::toCameraInfo(camera, "camera"));
     return Input{std::move(bag), std::move(camera), ground};
   }
   if (options.camera_path.empty()) throw std::runtime_error("--video needs --camera");
@@ -130,14 +138,15 @@ void giveBackground(const InputOptions& options, const kw::vision::BackgroundOpt
   const int total = frames.count();
   const int n = std::max(1, std::min(options.background_samples, total));
   std::vector<cv::Mat> samples;
-  cv::Mat frame;
-  double stamp;
-  for (int index = 0, next = 0; static_cast<int>(samples.size()) < n && frames.next(frame, stamp); ++index) {
-    if (index == next) {
-      samples.push_back(frame.clone());
+  Frame frame;
+  // The frames at evenly spread indices; a frame that cannot be used gives its place to the next.
+  for (int index = 0, next = 0; static_cast<int>(samples.size()) < n && frames.next(frame); ++index) {
+    if (index >= next && frame.problem.empty()) {
+      samples.push_back(frame.bgr.clone());
       next = n == 1 ? total : static_cast<int>(static_cast<long>(samples.size()) * (total - 1) / (n - 1));
     }
   }
+  if (samples.empty()) throw std::runtime_error("no frame of the input can be used (each is skipped: " + frame.problem + ")");
   session.setBackground(kw::vision::BackgroundModel::learn(samples, background));
   frames.rewind();
 }

@@ -5,19 +5,28 @@
 #include <opencv2/core.hpp>
 
 #include <memory>
+#include <string>
 
 #include "command_line.h"
 #include "kneed_walker/core/tracking/tracking_session.h"
 
 namespace kneed_walker::tools::track_offline {
 
+// A frame of the input: BGR and its stamp, or why it cannot be used (the frame is skipped and
+// counted, as the nodelet skips it: ros_glue::frameProblem).
+struct Frame {
+  cv::Mat bgr;
+  double stamp_s = 0;
+  std::string problem;  // empty: usable
+};
+
 // A sequence of frames that can be read again from its start.
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
   virtual void rewind() = 0;
-  // The next BGR frame and its stamp (s); false at the end.
-  virtual bool next(cv::Mat& bgr, double& stamp_s) = 0;
+  // The next frame; false at the end.
+  virtual bool next(Frame& frame) = 0;
   virtual int count() const = 0;
 };
 

@@ -21,27 +21,38 @@ TrackingLoop::TrackingLoop(const Options& options, Input& input, kw::tracking::T
 RunSummary TrackingLoop::run() {
   const bool tty = isatty(STDERR_FILENO);
   const int first_frame = options_.input.first_frame, max_frames = options_.input.max_frames;
-  cv::Mat frame;
-  double stamp = 0;
-  for (int index = 0; input_.frames->next(frame, stamp); ++index) {
+  Frame frame;
+  int index = 0;
+  std::optional<double> last_stamp_s;
+  for (; input_.frames->next(frame); ++index) {
     if (index < first_frame) continue;
     if (max_frames > 0 && session_.framesFed() >= max_frames) break;
+    // A frame the tracker cannot use is skipped and counted by reason, as the nodelet skips it.
+    if (frame.problem.empty() && last_stamp_s && !(frame.stamp_s > *last_stamp_s))
+      frame.problem = "its stamp is not after the previous frame's";
+    if (!frame.problem.empty()) {
+      skip(index, frame.problem);
+      continue;
+    }
     if (lost_at_px_ && start_.restarts()) restartLostTrack(index);
     std::vector<kw::tracking::SessionAnswer> answers;
     try {
-      answers = session_.feed(frame, stamp);
+      answers = session_.feed(frame.bgr, frame.stamp_s);
     } catch (const std::invalid_argument& e) {
-      // A frame the tracker cannot use (another size, no ground under the box): skipped and counted.
-      if (summary_.skipped++ == 0) std::fprintf(stderr, "\ntrack_offline: frame %d skipped: %s\n", index, e.what());
+      skip(index, e.what());  // another size, no ground under the box
       continue;
     }
+    last_stamp_s = frame.stamp_s;
     source_index_.push_back(index);
-    if (outputs_.drawing()) unanswered_[session_.framesFed() - 1] = frame.clone();
+    if (outputs_.drawing()) unanswered_[session_.framesFed() - 1] = frame.bgr.clone();
     for (size_t i = 0; i < answers.size(); ++i) answer(answers[i], i + 1 == answers.size());
     recordTiming(answers);
     printProgress(tty);
   }
   if (tty) std::fprintf(stderr, "\n");
+  if (index <= first_frame)
+    throw std::runtime_error("--first-frame " + std::to_string(first_frame) + ": the input has " + std::to_string(index) +
+                             " frames");
   const std::vector<kw::tracking::SessionAnswer> rest = session_.flushHeld();  // an input shorter than the samples
   for (size_t i = 0; i < rest.size(); ++i) answer(rest[i], i + 1 == rest.size());
   for (const kw::tracking::PersonAnswer& person : session_.finish())
@@ -49,6 +60,13 @@ RunSummary TrackingLoop::run() {
       if (options_.output.estimate != WrittenEstimate::kFiltered) writePose(m.input, m.stamp_s, m.pose, person.body);
   if (summary_.tracked == 0) throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
   return summary_;
+}
+
+void TrackingLoop::skip(int frame, const std::string& problem) {
+  ++summary_.skipped;
+  if (summary_.skipped_by_reason[problem]++ == 0)
+    std::fprintf(stderr, "\ntrack_offline: frame %d skipped: %s (the frames skipped for it are counted)\n", frame,
+                 problem.c_str());
 }
 
 // A lost track starts again from the box nearest to where the person was last seen.
@@ -155,6 +173,7 @@ void printSummary(const RunSummary& s, const Options& options) {
               "particles=%d\n",
               s.answered, s.tracked, s.skipped, s.lost, std::max(0, s.tracks_started - bodies), s.resampled,
               options.tracker.filter.num_particles);
+  for (const auto& [reason, count] : s.skipped_by_reason) std::printf("skipped %d frames: %s\n", count, reason.c_str());
   if (options.session.max_people > 1)
     std::printf("tracks_started=%d bodies_used=%d most_people_at_once=%d\n", s.tracks_started, bodies, s.most_people);
   std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(s.total_ms),

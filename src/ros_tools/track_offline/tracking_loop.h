@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "command_line.h"
@@ -19,6 +20,7 @@ struct RunSummary {
   int answered = 0;       // frames the session answered
   int tracked = 0;        // of them, frames with someone tracked
   int skipped = 0;        // frames the tracker could not use
+  std::map<std::string, int> skipped_by_reason;
   int lost = 0;           // estimates that reported their track lost
   int resampled = 0;      // estimates whose step resampled
   int tracks_started = 0;
@@ -41,6 +43,7 @@ class TrackingLoop {
   // The frame's overlay: each person's body, the particle cloud of the latest frame, the state.
   void drawAnswer(const core::tracking::SessionAnswer& answer, bool latest, int people_now);
   void writePose(int input, double stamp_s, const core::body::BodyPose& pose, int body);
+  void skip(int frame, const std::string& problem);  // counted by reason, the first of each said
   void restartLostTrack(int frame);
   void recordTiming(const std::vector<core::tracking::SessionAnswer>& answers);
   void printProgress(bool tty);
