@@ -6,7 +6,9 @@
 // particle's path written when the track ends (--lagged: each frame Δs frames later, as the
 // nodelet; --filtered: each frame's best particle at once), optionally an overlay video and the
 // projected body's image box per frame (for comparing with a person detector's boxes:
-// scripts/box_overlap), and prints the timing. The parts: track_offline/command_line (options),
+// scripts/box_overlap), and prints the timing. SIGINT or SIGTERM ends the run after the frame being
+// tracked: the outputs are written whole for the frames done, and the exit status is 128 + the
+// signal (130, 143). The parts: track_offline/command_line (options),
 // input (frames, camera, background), person_start, tracking_loop and outputs.
 //
 //   rosrun kneed_walker track_offline --bag seq.bag --camera seq_camera.yml --init-box 300 200 350 320
@@ -43,10 +45,11 @@ int run(int argc, char** argv) {
   to::giveBackground(options->input, options->likelihood.background, *input.frames, session);
   const to::PersonStart start(options->start, input.camera, input.ground);
   start.startFirst(session, options->input.first_frame);
+  to::stopOnSignals();
   const to::RunSummary summary = to::TrackingLoop(*options, input, session, start, outputs).run();
   outputs.commit();
   to::printSummary(summary, *options);
-  return 0;
+  return summary.interrupted_by == 0 ? 0 : 128 + summary.interrupted_by;  // as the shell reports a signal
 }
 
 }  // namespace

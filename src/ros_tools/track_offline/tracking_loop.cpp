@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <stdexcept>
 
@@ -13,6 +14,16 @@
 namespace kneed_walker::tools::track_offline {
 
 namespace kw = kneed_walker::core;
+
+namespace {
+volatile std::sig_atomic_t stop_signal = 0;
+void onStopSignal(int signal) { stop_signal = signal; }
+}  // namespace
+
+void stopOnSignals() {
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
+}
 
 TrackingLoop::TrackingLoop(const Options& options, Input& input, kw::tracking::TrackingSession& session,
                            const PersonStart& start, Outputs& outputs)
@@ -25,6 +36,12 @@ RunSummary TrackingLoop::run() {
   int index = 0;
   std::optional<double> last_stamp_s;
   for (; input_.frames->next(frame); ++index) {
+    if (stop_signal != 0) {
+      summary_.interrupted_by = stop_signal;
+      std::fprintf(stderr, "\ntrack_offline: %s at frame %d: the outputs hold the frames before it\n",
+                   stop_signal == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", index);
+      break;
+    }
     if (index < first_frame) continue;
     if (max_frames > 0 && session_.framesFed() >= max_frames) break;
     // A frame the tracker cannot use is skipped and counted by reason, as the nodelet skips it.
@@ -50,7 +67,7 @@ RunSummary TrackingLoop::run() {
     printProgress(tty);
   }
   if (tty) std::fprintf(stderr, "\n");
-  if (index <= first_frame)
+  if (index <= first_frame && summary_.interrupted_by == 0)
     throw std::runtime_error("--first-frame " + std::to_string(first_frame) + ": the input has " + std::to_string(index) +
                              " frames");
   const std::vector<kw::tracking::SessionAnswer> rest = session_.flushHeld();  // an input shorter than the samples
@@ -58,7 +75,8 @@ RunSummary TrackingLoop::run() {
   for (const kw::tracking::PersonAnswer& person : session_.finish())
     for (const kw::tracking::MapFrame& m : person.map_frames)
       if (options_.output.estimate != WrittenEstimate::kFiltered) writePose(m.input, m.stamp_s, m.pose, person.body);
-  if (summary_.tracked == 0) throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
+  if (summary_.tracked == 0 && summary_.interrupted_by == 0)
+    throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
   return summary_;
 }
 
@@ -176,6 +194,7 @@ void printSummary(const RunSummary& s, const Options& options) {
   for (const auto& [reason, count] : s.skipped_by_reason) std::printf("skipped %d frames: %s\n", count, reason.c_str());
   if (options.session.max_people > 1)
     std::printf("tracks_started=%d bodies_used=%d most_people_at_once=%d\n", s.tracks_started, bodies, s.most_people);
+  if (s.interrupted_by != 0) std::printf("interrupted_by_signal=%d (the outputs are partial)\n", s.interrupted_by);
   std::printf("tracker_ms_per_frame=%.1f precompute_ms=%.1f particles_ms=%.1f (medians)\n", median(s.total_ms),
               median(s.precompute_ms), median(s.particles_ms));
 }
