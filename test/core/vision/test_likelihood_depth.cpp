@@ -11,9 +11,10 @@
 namespace kneed_walker::core::vision {
 namespace {
 
-// A person walking across a robot's view (test/sequences/robot_eye_camera.yml: 1.2 m high),
-// 6 m away, over a textured ground: the likelihood of the true pose against the same pose moved
-// along the camera's line of sight (further: smaller in the image, its feet higher).
+// A person walking over a textured ground, seen by a robot's camera (test/sequences/
+// robot_eye_camera.yml: 1.2 m high, the person 6 m away) or by the PETS camera (6.7 m up): the
+// likelihood of the true pose against the same pose moved along the camera's line of sight
+// (further: smaller in the image, its feet higher).
 struct DepthScene {
   test::RenderedWalk rendered;
   BackgroundModel background = BackgroundModel::learn(rendered.empty);
