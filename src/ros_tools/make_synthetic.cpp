@@ -406,6 +406,7 @@ int main(int argc, char** argv) {
   app.add_flag("--occluder", s.occluder, "a board crosses in front of the person mid-sequence");
   app.add_option("--start-stamp", s.start_stamp_s, "stamp of the first frame, s since the epoch")->capture_default_str()
       ->check(kneed_walker::tools::FiniteRange(1e-3, 4e9));
+  if (!kneed_walker::tools::refuseEmptyArguments("make_synthetic", argc, argv)) return 1;
   CLI11_PARSE(app, argc, argv);
   if (const std::string problem = resolveFiles(app, argc, argv, s); !problem.empty()) {
     std::fprintf(stderr, "make_synthetic: %s\n", problem.c_str());

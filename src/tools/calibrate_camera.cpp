@@ -159,6 +159,7 @@ int run(int argc, char** argv) {
   check_option->needs(check_out_option);
   check_out_option->needs(check_option);
   person_option->needs(check_option);
+  if (!kneed_walker::tools::refuseEmptyArguments("calibrate_camera", argc, argv)) return 1;
   CLI11_PARSE(app, argc, argv);
   if (intrinsics_path.empty() && camera_path.empty()) {
     std::fprintf(stderr, "calibrate_camera: give --intrinsics, --points and --out to calibrate, or --camera and --check to check\n");

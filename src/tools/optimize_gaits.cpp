@@ -169,6 +169,7 @@ int run(int argc, char** argv) {
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("--walker-model", walker_model, "body proportions of the walker (the table records them)")
       ->check(CLI::ExistingFile)->capture_default_str();
+  if (!kneed_walker::tools::refuseEmptyArguments("optimize_gaits", argc, argv)) return 1;
   CLI11_PARSE(app, argc, argv);
   // The swing bounds to solve with: those given, else (resuming or merging) the table's.
   auto takeSwingBounds = [&](kw::gait::GaitTable& table) {

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -14,6 +15,21 @@
 #include "kneed_walker/core/common/option_table.h"
 
 namespace kneed_walker::tools {
+
+// Refuses an empty argument ("") before CLI11 parses: CLI11 2.1 loops forever on one inside a
+// multi-value option followed by another option (--init-box 1 2 3 "" --out-csv e.csv). Prints
+// "<tool>: ..." naming the option it follows and returns false.
+inline bool refuseEmptyArguments(const char* tool, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (argv[i][0] != '\0') continue;
+    int option = i - 1;
+    while (option > 0 && argv[option][0] != '-') --option;
+    std::fprintf(stderr, "%s: argument %d is empty%s%s: give a value\n", tool, i, option > 0 ? " after " : "",
+                 option > 0 ? argv[option] : "");
+    return false;
+  }
+  return true;
+}
 
 // A finite number in [min, max].
 inline CLI::Validator FiniteRange(double min, double max) {

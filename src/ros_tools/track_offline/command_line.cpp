@@ -140,6 +140,10 @@ std::optional<Options> parseOptions(int argc, char** argv, int& exit_code) {
   app.add_option("--walker-model", options.walker_model_path, "body proportions")->check(CLI::ExistingFile)
       ->capture_default_str();
   addOutputOptions(app, options.output, filtered, lagged);
+  if (!refuseEmptyArguments("track_offline", argc, argv)) {
+    exit_code = 1;
+    return std::nullopt;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
