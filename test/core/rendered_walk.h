@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
+#include "kneed_walker/core/vision/likelihood.h"
 #include "shipped_config.h"
 
 namespace kneed_walker::core::test {
@@ -66,6 +67,23 @@ struct RenderedWalk {
         synthetic::drawPerson(frames.back(), camera, second->frames[f].pose, shape, other);
       synthetic::addSensorNoise(frames.back(), 3.0, 200 + f);
     }
+  }
+
+  // The person's appearance as the tracker learns it, from the true pose's part outlines in
+  // `frame`.
+  vision::AppearanceModel appearanceAt(int frame) const {
+    vision::BodyOutlines outlines;
+    vision::projectBodyParts(camera, walk.frames[frame].pose, shape, outlines);
+    std::array<std::vector<cv::Vec3b>, vision::kNumPartKinds> samples;
+    vision::RowSpans spans;
+    for (int p = 0; p < body::kNumBodyParts; ++p) {
+      vision::rasterize(outlines[p], spans);
+      for (int k = 0; k < spans.rows; ++k)
+        for (int x = spans.left[k]; x < spans.right[k]; ++x)
+          samples[vision::partKind(static_cast<body::BodyPart>(p))].push_back(
+              frames[frame].at<cv::Vec3b>(spans.first_row + k, x));
+    }
+    return vision::AppearanceModel::learn(samples);
   }
 };
 

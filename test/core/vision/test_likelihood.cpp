@@ -29,19 +29,7 @@ struct Scene {
   const cv::Mat& current = rendered.frames[frame];
 
   Scene() {
-    // The appearance from the first frame's true outlines.
-    BodyOutlines outlines;
-    projectBodyParts(camera, walk.frames[0].pose, shape, outlines);
-    std::array<std::vector<cv::Vec3b>, kNumPartKinds> samples;
-    RowSpans spans;
-    for (int p = 0; p < body::kNumBodyParts; ++p) {
-      rasterize(outlines[p], spans);
-      for (int k = 0; k < spans.rows; ++k)
-        for (int x = spans.left[k]; x < spans.right[k]; ++x)
-          samples[partKind(static_cast<body::BodyPart>(p))].push_back(
-              rendered.frames[0].at<cv::Vec3b>(spans.first_row + k, x));
-    }
-    appearance = AppearanceModel::learn(samples);
+    appearance = rendered.appearanceAt(0);  // from the first frame's true outlines
   }
 
   FrameEvidence evidence(const LikelihoodOptions& o) const {

@@ -25,18 +25,7 @@ struct DepthScene {
                                                 std::string(KNEED_WALKER_SOURCE_DIR) + "/test/sequences/robot_eye_camera.yml",
                                                 Eigen::Vector2d(540, 298), M_PI)
                            : test::RenderedWalk(1.0, 10, 3)) {
-    BodyOutlines outlines;
-    projectBodyParts(rendered.camera, rendered.walk.frames[0].pose, rendered.shape, outlines);
-    std::array<std::vector<cv::Vec3b>, kNumPartKinds> samples;
-    RowSpans spans;
-    for (int p = 0; p < body::kNumBodyParts; ++p) {
-      rasterize(outlines[p], spans);
-      for (int k = 0; k < spans.rows; ++k)
-        for (int x = spans.left[k]; x < spans.right[k]; ++x)
-          samples[partKind(static_cast<body::BodyPart>(p))].push_back(
-              rendered.frames[0].at<cv::Vec3b>(spans.first_row + k, x));
-    }
-    appearance = AppearanceModel::learn(samples);
+    appearance = rendered.appearanceAt(0);
   }
   // The log-likelihood at `frame` of the true pose moved by `depth_m` along the line of sight.
   double score(int frame, double depth_m, const LikelihoodOptions& options) const {
