@@ -20,6 +20,7 @@
 #include "track_offline/outputs.h"
 #include "track_offline/person_start.h"
 #include "track_offline/tracking_loop.h"
+#include "interrupt.h"
 #include "tool_main.h"
 
 namespace kw = kneed_walker::core;
@@ -45,7 +46,7 @@ int run(int argc, char** argv) {
   to::giveBackground(options->input, options->likelihood.background, *input.frames, session);
   const to::PersonStart start(options->start, input.camera, input.ground);
   start.startFirst(session, options->input.first_frame);
-  to::stopOnSignals();
+  kneed_walker::tools::stopOnSignals();
   const to::RunSummary summary = to::TrackingLoop(*options, input, session, start, outputs).run();
   outputs.commit();
   to::printSummary(summary, *options);

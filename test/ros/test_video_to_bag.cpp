@@ -71,5 +71,25 @@ TEST(VideoToBag, WritesTheFramesAtTheAskedRateWithTheCalibratedCamera) {
   }
 }
 
+// Without --fps the frames are stamped at the video's own rate (the PETS AVI says 10 frames a
+// second), never at a rate of the tool's.
+TEST(VideoToBag, StampsAtTheVideosRateByDefault) {
+  const std::string video = kShared + "/data/pets2009/vtest.avi", calibration = kShared + "/data/pets2009/View_001_camera.yml";
+  const std::string out = (std::filesystem::temp_directory_path() / "kneed_walker_video_to_bag_rate.bag").string();
+  const std::string command = std::string(KNEED_WALKER_VIDEO_TO_BAG) + " --video " + video + " --camera " + calibration +
+                              " --out " + out + " --frames 3 > /dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  std::vector<double> stamps;
+  {
+    rosbag::Bag bag(out, rosbag::bagmode::Read);
+    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/camera/image_raw")))
+      stamps.push_back(m.instantiate<sensor_msgs::Image>()->header.stamp.toSec());
+  }
+  std::filesystem::remove(out);
+  ASSERT_EQ(stamps.size(), 3u);
+  EXPECT_NEAR(stamps[1] - stamps[0], 1.0 / cv::VideoCapture(video).get(cv::CAP_PROP_FPS), 1e-6);
+  EXPECT_NEAR(stamps[2] - stamps[1], 0.1, 1e-6);
+}
+
 }  // namespace
 }  // namespace kneed_walker::ros_glue

@@ -4,26 +4,17 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <csignal>
 #include <cstdio>
 #include <stdexcept>
 
 #include "kneed_walker/core/vision/overlay.h"
+#include "interrupt.h"
 #include "median.h"
 
 namespace kneed_walker::tools::track_offline {
 
 namespace kw = kneed_walker::core;
 
-namespace {
-volatile std::sig_atomic_t stop_signal = 0;
-void onStopSignal(int signal) { stop_signal = signal; }
-}  // namespace
-
-void stopOnSignals() {
-  std::signal(SIGINT, onStopSignal);
-  std::signal(SIGTERM, onStopSignal);
-}
 
 TrackingLoop::TrackingLoop(const Options& options, Input& input, kw::tracking::TrackingSession& session,
                            const PersonStart& start, Outputs& outputs)
@@ -36,10 +27,10 @@ RunSummary TrackingLoop::run() {
   int index = 0;
   std::optional<double> last_stamp_s;
   for (; input_.frames->next(frame); ++index) {
-    if (stop_signal != 0) {
-      summary_.interrupted_by = stop_signal;
+    if (const int signal = stopSignal(); signal != 0) {
+      summary_.interrupted_by = signal;
       std::fprintf(stderr, "\ntrack_offline: %s at frame %d: the outputs hold the frames before it\n",
-                   stop_signal == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", index);
+                   stopSignalName(signal), index);
       break;
     }
     if (index < first_frame) continue;

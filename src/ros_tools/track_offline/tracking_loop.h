@@ -25,16 +25,12 @@ struct RunSummary {
   int resampled = 0;      // estimates whose step resampled
   int tracks_started = 0;
   int most_people = 0;    // tracked at once
-  int interrupted_by = 0;  // the signal (SIGINT, SIGTERM) that ended the run early, or 0
+  int interrupted_by = 0;  // the signal (SIGINT, SIGTERM) that ended the run early, or 0 (interrupt.h)
   std::set<int> bodies_used;
   // Per frame with someone tracked (the first excepted): the session's whole time, and the
   // trackers' precomputation and particles summed, ms.
   std::vector<double> total_ms, precompute_ms, particles_ms;
 };
-
-// Makes SIGINT and SIGTERM end the run after the frame being tracked (RunSummary::interrupted_by),
-// with complete outputs for the frames done.
-void stopOnSignals();
 
 class TrackingLoop {
  public:
