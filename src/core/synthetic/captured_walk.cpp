@@ -200,9 +200,9 @@ Eigen::Isometry3d placeCaptured(const CapturedMotion& motion, const CapturedPlac
   Eigen::Isometry3d world = Eigen::Isometry3d::Identity();
   world.linear() = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d turned = world.linear() * first;
-  // The lowest foot joint stands a foot's radius (CapturedFigure) above the ground.
+  // The lowest foot joint stands a drawn foot's radius above the ground.
   world.translation() = Eigen::Vector3d(placement.start_m.x() - turned.x(), placement.start_m.y() - turned.y(),
-                                        0.045 - lowest);
+                                        CapturedFigure{}.foot_radius_m - lowest);
   return world;
 }
 

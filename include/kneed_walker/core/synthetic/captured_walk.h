@@ -38,7 +38,8 @@ std::vector<Eigen::Vector3d> jointsAt(const CapturedMotion& motion, double t_s);
 
 // How a captured walk is placed in a scene: rotated about the vertical so that its overall
 // direction of travel (first to last frame of its mid-hip) is `heading_rad`, and moved so that
-// its first frame's mid-hip stands over `start_m`; its lowest foot over the whole walk on Z = 0.
+// its first frame's mid-hip stands over `start_m`; its lowest foot joint over the whole walk a drawn
+// foot's radius (CapturedFigure::foot_radius_m) above Z = 0.
 struct CapturedPlacement {
   Eigen::Vector2d start_m = Eigen::Vector2d::Zero();
   double heading_rad = 0;
