@@ -271,8 +271,8 @@ void TrackerNodelet::onInitBox(const sensor_msgs::RegionOfInterestConstPtr& box)
     NODELET_ERROR("~init_box: a box of %ux%u px is empty; ignored", box->width, box->height);
     return;
   }
-  NODELET_INFO("~init_box: the track starts from the box at (%u, %u), %ux%u px, at the next frame", box->x_offset,
-               box->y_offset, box->width, box->height);
+  NODELET_INFO("~init_box: a box at (%u, %u), %ux%u px; the track starts from it at the next frame if it lies on "
+               "the image", box->x_offset, box->y_offset, box->width, box->height);
   std::lock_guard<std::mutex> lock(mutex_);
   waiting_box_ = cv::Rect2d(box->x_offset, box->y_offset, box->width, box->height);
 }

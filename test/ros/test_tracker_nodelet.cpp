@@ -5,7 +5,9 @@
 #include <image_transport/image_transport.h>
 #include <nodelet/NodeletLoad.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/RegionOfInterest.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_msgs/TFMessage.h>
@@ -241,6 +243,43 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
     if (d.name == "prior_noise_scale") EXPECT_EQ(d.value, 0.5) << "NaN was taken";
   ASSERT_TRUE(send(10.75));
   EXPECT_NE(last.message.find("(2/"), std::string::npos) << "NaN started over: " << last.message;
+
+  // ~init_box that cannot be a person in this 64x48 image: empty, off the image, or an offset
+  // wrapped around uint32. Each is refused with an error naming it, and the session goes on
+  // (nothing starts over, no frame is lost).
+  std::vector<std::string> errors;
+  ros::Subscriber log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 50, [&](const rosgraph_msgs::LogConstPtr& log) {
+    if (log->level >= rosgraph_msgs::Log::ERROR) errors.push_back(log->msg);
+  });
+  ros::Publisher box_pub = nh.advertise<sensor_msgs::RegionOfInterest>("/kneed_walker/init_box", 1);
+  ASSERT_TRUE(waitFor([&] { return box_pub.getNumSubscribers() > 0 && log_sub.getNumPublishers() > 0; }, 10.0));
+  struct BadBox {
+    uint32_t x, y, width, height;
+    const char* expected;
+  };
+  double at = 10.75;
+  uint64_t frames = last.frames_processed;
+  for (const BadBox& b : {BadBox{10, 10, 0, 20, "is empty"}, BadBox{200, 10, 10, 20, "lies mostly outside"},
+                          BadBox{4294967000u, 10, 500, 20, "lies mostly outside"},
+                          BadBox{50, 40, 30, 30, "lies mostly outside"}}) {
+    sensor_msgs::RegionOfInterest box;
+    box.x_offset = b.x;
+    box.y_offset = b.y;
+    box.width = b.width;
+    box.height = b.height;
+    errors.clear();
+    box_pub.publish(box);
+    ros::Duration(0.3).sleep();  // the box before the frame it applies to
+    ASSERT_TRUE(send(at += 0.1));
+    ++frames;
+    EXPECT_EQ(last.frames_processed, frames) << b.expected;
+    EXPECT_EQ(last.message.find("(1/"), std::string::npos) << "a bad box started over: " << last.message;
+    EXPECT_TRUE(waitFor([&] {
+      for (const std::string& e : errors)
+        if (e.find("init_box") != std::string::npos && e.find(b.expected) != std::string::npos) return true;
+      return false;
+    }, 5.0)) << "no error naming the box (" << b.x << ", " << b.y << ") " << b.width << "x" << b.height;
+  }
 }
 
 TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {

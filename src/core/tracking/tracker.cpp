@@ -25,6 +25,14 @@ double msSince(Clock::time_point start) {
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
                           const cv::Rect2d& box) {
   if (!(box.width > 0 && box.height > 0)) throw std::invalid_argument("the person's box is empty");
+  // A box mostly off the image (a typo, or a uint32 offset wrapped around) would place the guess
+  // where nobody can be seen.
+  const cv::Rect2d image(0, 0, camera.width(), camera.height());
+  if ((box & image).area() < 0.5 * box.area())
+    throw std::invalid_argument("the person's box (" + std::to_string(box.x) + ", " + std::to_string(box.y) + ") " +
+                                std::to_string(box.width) + "x" + std::to_string(box.height) +
+                                " px lies mostly outside the " + std::to_string(camera.width()) + "x" +
+                                std::to_string(camera.height()) + " image");
   // The ground point under the middle of the box's bottom edge.
   const std::optional<Eigen::Vector3d> point =
       vision::groundPointOnPlane(camera, ground, {box.x + 0.5 * box.width, box.y + box.height});

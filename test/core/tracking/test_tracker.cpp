@@ -390,6 +390,14 @@ TEST(Tracker, GuessFromABoxPutsTheFeetOnTheGroundUnderIt) {
   EXPECT_LT((guess.position_m - truth).norm(), 0.3);
   EXPECT_GE(guess.heading_sd_rad, M_PI) << "a box says nothing of the heading";
   EXPECT_THROW(guessFromBox(s.camera, s.walk.ground, cv::Rect2d(0, 0, 0, 0)), std::invalid_argument);
+  // Half off the image's right edge is still a person entering; beyond it, or a uint32 offset
+  // wrapped around, is not.
+  const double w = s.camera.width();
+  EXPECT_NO_THROW(guessFromBox(s.camera, s.walk.ground, box + cv::Point2d(w - box.x - 0.6 * box.width, 0)));
+  EXPECT_THROW(guessFromBox(s.camera, s.walk.ground, box + cv::Point2d(w - box.x - 0.4 * box.width, 0)),
+               std::invalid_argument);
+  EXPECT_THROW(guessFromBox(s.camera, s.walk.ground, cv::Rect2d(4294967000.0, box.y, box.width, box.height)),
+               std::invalid_argument);
 }
 
 }  // namespace

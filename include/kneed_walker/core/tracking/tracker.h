@@ -49,8 +49,8 @@ struct InitialGuess {
 };
 
 // A guess from a person's box in the image: the feet at the middle of the box's bottom edge on
-// the ground plane; heading unknown unless given. Throws std::invalid_argument when the box's
-// bottom does not see the ground.
+// the ground plane; heading unknown unless given. Throws std::invalid_argument when the box is
+// empty, lies mostly (over half its area) outside the image, or its bottom does not see the ground.
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
                           const cv::Rect2d& box_px);
 
