@@ -28,6 +28,11 @@ std::string frameProblem(const sensor_msgs::Image& image, const sensor_msgs::Cam
   std::ostringstream problem;
   if (image.width == 0 || image.height == 0) {
     problem << "image is empty (" << image.width << "x" << image.height << ")";
+  } else if (image.width * static_cast<uint64_t>(image.height) > kMaxImagePixels) {
+    problem << "the image is " << image.width << "x" << image.height << ", larger than the "
+            << kMaxImagePixels / 1'000'000 << " megapixels this tracker takes";
+  } else if (image.header.stamp.isZero()) {
+    problem << "the image has no stamp (0)";
   } else if (!supportedEncoding(image.encoding)) {
     problem << "image encoding '" << image.encoding
             << "' is not supported (mono8, bgr8, rgb8, bgra8 or rgba8)";

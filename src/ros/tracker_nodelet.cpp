@@ -398,10 +398,6 @@ void TrackerNodelet::process(const Frame& frame) {
     num_particles_ = particles;
   }
   std::string problem = frameProblem(*frame.image, *frame.info);
-  if (problem.empty() && frame.image->width * static_cast<uint64_t>(frame.image->height) > 64'000'000ull)
-    problem = "the image is " + std::to_string(frame.image->width) + "x" + std::to_string(frame.image->height) +
-              ", larger than the 64 megapixels this tracker takes";
-  if (problem.empty() && header.stamp.isZero()) problem = "the image has no stamp (0)";
   if (!problem.empty()) return skipFrame(header, problem);
   if (!last_stamp_.isZero() && header.stamp <= last_stamp_) {
     // A bag that loops or was played again: the track starts over from this frame.

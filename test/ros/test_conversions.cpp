@@ -19,6 +19,7 @@ namespace {
 struct Frame {
   Frame() {
     image.header.frame_id = "camera_optical";
+    image.header.stamp = ros::Time(1.5);
     image.width = 4;
     image.height = 3;
     image.encoding = sensor_msgs::image_encodings::BGR8;
@@ -80,6 +81,8 @@ TEST(FrameProblem, EachDefectIsNamed) {
        [](Frame& f) { f.info.K[4] = std::numeric_limits<double>::quiet_NaN(); }},
       {"model 'fisheye'", [](Frame& f) { f.info.distortion_model = "fisheye"; }},
       {"no frame_id", [](Frame& f) { f.image.header.frame_id.clear(); }},
+      {"no stamp (0)", [](Frame& f) { f.image.header.stamp = ros::Time(); }},
+      {"larger than the 64 megapixels", [](Frame& f) { f.image.width = f.image.height = 9000; }},
   };
   for (const Case& c : cases) {
     Frame f;

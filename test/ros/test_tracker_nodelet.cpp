@@ -157,6 +157,8 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
       {"short data", [](auto& image, auto&) { image.data.resize(10); }, "bytes"},
       {"camera_info of another size", [](auto&, auto& info) { info.width = 80; }, "camera_info is for 80x48"},
       {"no frame id", [](auto& image, auto& info) { image.header.frame_id = info.header.frame_id = ""; }, "frame_id"},
+      {"no stamp", [](auto& image, auto& info) { image.header.stamp = info.header.stamp = ros::Time(); },
+       "the image has no stamp (0)"},
       {"good again", [](auto&, auto&) {}, ""},
   };
   double stamp = 10;

@@ -11,6 +11,7 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,9 +23,12 @@
 
 namespace kneed_walker::ros_glue {
 
+// The largest image frameProblem accepts, in pixels.
+constexpr uint64_t kMaxImagePixels = 64'000'000;
 // Why an image + camera_info pair cannot be tracked on, or an empty string when it can:
-// empty or inconsistent image buffers, unsupported encodings, camera_info of another size,
-// non-positive or non-finite focal lengths, unknown distortion models, missing frame ids.
+// empty, oversized or inconsistent image buffers, no stamp (0), unsupported encodings,
+// camera_info of another size, non-positive or non-finite focal lengths, unknown distortion
+// models, missing frame ids.
 // The nodelet and track_offline skip and count such frames instead of failing on them.
 // `needs_frame_id`: the camera is placed through tf by the image's frame id (false: the camera
 // comes from a calibration file).
