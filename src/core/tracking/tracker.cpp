@@ -242,7 +242,7 @@ double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose
   return log_likelihood;
 }
 
-void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
+void Tracker::projectGuessBody(const InitialGuess& guess, vision::BodyOutlines& outlines) const {
   // The guess's body in mid-stance (legs together), on a mid-range gait.
   int middle = 0;
   const double mid_speed = 0.5 * (guess.min_speed_kmh + guess.max_speed_kmh);
@@ -252,9 +252,12 @@ void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
   body::BodyPose pose;
   TrackerParticle particle;
   particle.body = bank_[middle].prior->sample(0.25, guess.position_m, guess.heading_rad, random, pose);
-  pose = this->pose(particle);
+  project(this->pose(particle), outlines);
+}
+
+void Tracker::learnAppearance(const cv::Mat& bgr, const InitialGuess& guess) {
   vision::BodyOutlines outlines;
-  project(pose, outlines);
+  projectGuessBody(guess, outlines);
   // Pixels inside each part that the background explains worse than a flat foreground density
   // (colour uniform over 256³, gradient zero-mean with the appearance model's spread) would.
   const double gradient_sd = likelihood_.appearance.gradient_sd;
@@ -327,6 +330,11 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   const auto precompute_at = Clock::now();
   evidence_.push_back(std::make_unique<vision::FrameEvidence>());
   evidence_.back()->compute(bgr, cv::Mat(), roi, background_, appearance_, likelihood_);
+  {
+    vision::BodyOutlines outlines;
+    projectGuessBody(guess, outlines);
+    evidence_.back()->setReferenceAreas(vision::partAreas(outlines));
+  }
   evidence_frames_.push_back(0);
   evidence_dt_s_.push_back(0.0);
   timing_ = TrackerTiming{};
@@ -386,6 +394,11 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   const auto precompute_at = Clock::now();
   auto evidence = std::make_unique<vision::FrameEvidence>();
   evidence->compute(bgr, previous_grey_, regionOfInterest(), background_, appearance_, likelihood_);
+  {
+    vision::BodyOutlines outlines;
+    project(last_pose_, outlines);
+    evidence->setReferenceAreas(vision::partAreas(outlines));
+  }
   evidence_.push_back(std::move(evidence));
   evidence_frames_.push_back(frame_);
   evidence_dt_s_.push_back(dt_s_);

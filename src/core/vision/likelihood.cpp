@@ -18,7 +18,7 @@ const common::OptionTable<LikelihoodOptions>& likelihoodOptionTable() {
       {"use_optical_flow", [](O& o) -> OptionField { return &o.use_flow; }, 0, 0, "",
        "the likelihood's optical flow term (paper eq. 13); false for footage of a few frames a second"},
       {"appearance_weight", [](O& o) -> OptionField { return &o.appearance_weight; }, 0, 100, "",
-       "weight of each part's average appearance log ratio"},
+       "weight of each part's appearance score (log ratios summed over its pixels, per pixel of its expected area)"},
       {"flow_weight", [](O& o) -> OptionField { return &o.flow_weight; }, 0, 100, "",
        "weight of each part's average flow log ratio"},
       {"flow_min_sd_px", [](O& o) -> OptionField { return &o.flow.min_sd_px; }, 0.01, 100, "px",
@@ -349,7 +349,8 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     score.pixels = pixels;
     score.flow_points = flow_count[p];
     if (pixels >= options.min_part_pixels) {
-      score.appearance = (appearance_sum[p] + options.outside_ratio * outside[p]) / pixels;
+      const int reference = evidence.referenceAreas()[p];
+      score.appearance = (appearance_sum[p] + options.outside_ratio * outside[p]) / (reference > 0 ? reference : pixels);
       total += options.appearance_weight * score.appearance;
     }
     if (flow_count[p] > 0) {
@@ -359,6 +360,16 @@ double evaluateLikelihood(const FrameEvidence& evidence, const BodyOutlines& out
     if (scores) (*scores)[p] = score;
   }
   return total;
+}
+
+PartAreas partAreas(const BodyOutlines& outlines) {
+  PartAreas areas{};
+  RowSpans spans;
+  for (int p = 0; p < body::kNumBodyParts; ++p) {
+    rasterize(outlines[p], spans);
+    for (int k = 0; k < spans.rows; ++k) areas[p] += std::max(0, spans.right[k] - spans.left[k]);
+  }
+  return areas;
 }
 
 }  // namespace kneed_walker::core::vision

@@ -154,6 +154,35 @@ TEST(Likelihood, HiddenPartsAndOutsidePixelsAreCounted) {
   EXPECT_NEAR(outside[body::kTorsoPart].appearance, s.options.outside_ratio, 1e-9);
 }
 
+// With reference areas a part's appearance is its sum over the reference area: a torso shrunk
+// to half its width inside the person (a body too far away) keeps its average but loses half its
+// score; without them (zero) the score is the average over the part's own pixels.
+TEST(Likelihood, AReferenceAreaMakesAShrunkPartLoseTheFigureItLeaves) {
+  const Scene& s = scene();
+  FrameEvidence e = s.evidence(s.options);
+  BodyOutlines outlines;
+  projectBodyParts(s.camera, s.walk.frames[s.frame].pose, s.shape, outlines);
+  const PartAreas areas = partAreas(outlines);
+  EXPECT_GT(areas[body::kTorsoPart], 200);
+  BodyOutlines shrunk = outlines;
+  PartOutline& torso = shrunk[body::kTorsoPart];
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (int i = 0; i < torso.size; ++i) centre += torso.hull[i];
+  centre /= torso.size;
+  for (int i = 0; i < torso.size; ++i) torso.hull[i].x() = centre.x() + 0.5 * (torso.hull[i].x() - centre.x());
+  PartScores whole, half;
+  evaluateLikelihood(e, outlines, nullptr, s.options, &whole);
+  evaluateLikelihood(e, shrunk, nullptr, s.options, &half);
+  const int t = body::kTorsoPart;
+  EXPECT_GT(half[t].appearance, 0.8 * whole[t].appearance) << "an average does not mind the shrinking";
+  e.setReferenceAreas(areas);
+  evaluateLikelihood(e, outlines, nullptr, s.options, &whole);
+  evaluateLikelihood(e, shrunk, nullptr, s.options, &half);
+  EXPECT_GT(whole[t].appearance, 1.0);
+  EXPECT_LT(half[t].appearance, 0.65 * whole[t].appearance) << "a sum over the reference area does";
+  EXPECT_NEAR(half[t].pixels, 0.5 * whole[t].pixels, 0.15 * whole[t].pixels);
+}
+
 // Occlusion: of two parts with the same outline, the nearer one has the pixels and the farther
 // one is hidden behind it, whichever parts they are (the far leg behind the near one, paper §4).
 TEST(Likelihood, ANearerPartHidesAFartherOne) {

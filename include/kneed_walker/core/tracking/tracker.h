@@ -221,6 +221,8 @@ class Tracker {
   TrackEstimate estimate(const FilterStepReport& report) const;
   cv::Rect regionOfInterest() const;
   void learnAppearance(const cv::Mat& bgr, const InitialGuess& guess);
+  // The body standing in mid-stance at the guess, projected.
+  void projectGuessBody(const InitialGuess& guess, vision::BodyOutlines& outlines) const;
 
   vision::Camera camera_;
   vision::GroundPlane ground_;

@@ -1,6 +1,8 @@
 // The image likelihood of paper §4: log p(z_t | s_t) up to a constant, as the sum over body
-// parts of each part's average appearance log-likelihood ratio (foreground part model against
-// the background model) over its visible pixels, and its average optical-flow log-likelihood
+// parts of each part's appearance log-likelihood ratio (foreground part model against the
+// background model) summed over its visible pixels and divided by its reference area (the
+// paper averages over the part's own pixels, which lets a body shrink inside the person's
+// silhouette, i.e. move away, at no cost), and its average optical-flow log-likelihood
 // ratio (eq. 13 at the motion the particle predicts against u = 0) over its visible grid
 // points. Parts occlude each other: a part's pixels covered by a nearer part are not its own.
 //
@@ -48,6 +50,9 @@ const common::OptionTable<LikelihoodOptions>& likelihoodOptionTable();
 // Every problem with those options, naming each; empty when usable.
 std::vector<std::string> validate(const LikelihoodOptions& options);
 
+// Pixels per body part.
+using PartAreas = std::array<int, body::kNumBodyParts>;
+
 class FrameEvidence {
  public:
   // The evidence of one BGR frame inside `roi` (clipped to the image). `previous_grey` is the
@@ -56,6 +61,12 @@ class FrameEvidence {
                const BackgroundModel& background, const AppearanceModel& appearance,
                const LikelihoodOptions& options);
   const cv::Rect& roi() const { return roi_; }
+  // Each part's area, pixels, on a body where the person is believed to be (the last estimate):
+  // a part's appearance score is its sum of log ratios over this area, so a body that shrinks
+  // inside the person's silhouette (moves away) loses the pixels it leaves, where an average
+  // over its own pixels would not mind. Zero for a part: the average over its own pixels.
+  void setReferenceAreas(const PartAreas& areas_px) { reference_areas_px_ = areas_px; }
+  const PartAreas& referenceAreas() const { return reference_areas_px_; }
   bool hasFlow() const { return !flow_.empty(); }
   const FlowField& flow() const { return flow_; }
   // Σ of a kind's log ratios over columns [x0, x1) of image row y (inside the roi).
@@ -70,11 +81,12 @@ class FrameEvidence {
   // at random (the hot spot); a row's sums stay within 1e-3 of double's.
   std::array<cv::Mat, kNumPartKinds> prefix_;
   FlowField flow_;
+  PartAreas reference_areas_px_{};
 };
 
 // What evaluate() found per part.
 struct PartScore {
-  double appearance = 0;  // average log ratio over the part's pixels (outside ones at outside_ratio)
+  double appearance = 0;  // log ratios over the part's pixels (outside ones at outside_ratio) / reference area
   double flow = 0;        // average flow log ratio over its visible grid points
   int pixels = 0;         // visible pixels (inside and outside the evidence's region)
   int flow_points = 0;
@@ -104,5 +116,7 @@ struct RowSpans {
   std::vector<int> left, right;
 };
 void rasterize(const PartOutline& outline, RowSpans& spans);
+// Each visible part's pixels, as if no part hid another (0 for a hidden part).
+PartAreas partAreas(const BodyOutlines& outlines);
 
 }  // namespace kneed_walker::core::vision
