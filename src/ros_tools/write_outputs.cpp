@@ -7,9 +7,11 @@
 // not seen are numbered from the images around them by the input's frame interval. The files
 // are written as the messages come (the overlay) or when the node stops (the CSVs, in order of
 // frame and body) when the node stops: at Ctrl-C, or --idle-timeout seconds (wall time) after the
-// last message once messages came (a bag has played; track.launch then ends).
+// last message once messages came (a bag has played; track.launch then ends). The input's frame
+// rate (the overlay video's) is --fps if given, else the median interval of the input images'
+// stamps: the overlay waits for the first kRateImages images to know it.
 //
-//   rosrun kneed_walker write_outputs --out-dir DIR [--fps 7] [--tracker /kneed_walker]
+//   rosrun kneed_walker write_outputs --out-dir DIR [--fps 0] [--tracker /kneed_walker]
 //       [--image /camera/image_raw] [--idle-timeout 0]
 #include <CLI/CLI.hpp>
 #include <cv_bridge/cv_bridge.h>
@@ -18,8 +20,10 @@
 #include <sensor_msgs/Image.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -33,9 +37,17 @@
 
 namespace {
 
+// Images whose stamps give the frame rate when --fps is not given.
+constexpr size_t kRateImages = 5;
+// The overlay's rate when the input ended before two images were seen, or when this many
+// overlays came before kRateImages images (the input topic is not the tracker's).
+constexpr double kFallbackFps = 10.0;
+constexpr size_t kMaxWaitingOverlays = 100;
+
 class OutputWriter {
  public:
-  OutputWriter(const std::string& out_dir, double fps) : out_dir_(out_dir), fps_(fps) {}
+  OutputWriter(const std::string& out_dir, double fps, const std::string& image_topic)
+      : out_dir_(out_dir), image_topic_(image_topic), fps_(fps) {}
 
   void onImage(const sensor_msgs::ImageConstPtr& image) {
     last_message_ = ros::WallTime::now();
@@ -56,28 +68,50 @@ class OutputWriter {
       ROS_WARN_THROTTLE(5.0, "write_outputs: an overlay image cannot be converted (%s); skipped", e.what());
       return;
     }
-    if (!overlay_.isOpened()) {
-      overlay_.open(out_dir_ + "/overlay.avi", cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps_,
-                    bgr->image.size());
-      if (!overlay_.isOpened()) ROS_ERROR("write_outputs: cannot write %s/overlay.avi", out_dir_.c_str());
+    waiting_overlays_.push_back(bgr->image.clone());
+    if (overlay_.isOpened()) {
+      writeOverlays(overlay_fps_);
+    } else if (fps_ > 0 || image_stamps_.size() >= kRateImages) {
+      writeOverlays(rate());
+    } else if (waiting_overlays_.size() > kMaxWaitingOverlays) {
+      ROS_WARN("write_outputs: %zu overlays and %zu images on %s: the frame rate is not known, overlay.avi at %g fps "
+               "(give --fps, or --image the tracker's input)", waiting_overlays_.size(), image_stamps_.size(),
+               image_topic_.c_str(), kFallbackFps);
+      writeOverlays(kFallbackFps);
     }
-    if (overlay_.isOpened() && bgr->image.size() == overlay_size_.value_or(bgr->image.size())) {
-      overlay_size_ = bgr->image.size();
-      overlay_.write(bgr->image);
-      ++overlay_frames_;
-    }
+  }
+
+  // The input's frame rate: --fps, else from the median interval of the images' stamps (0: not
+  // known, fewer than two images).
+  double rate() const {
+    if (fps_ > 0) return fps_;
+    if (image_stamps_.size() < 2) return 0;
+    std::vector<double> intervals;
+    for (auto it = image_stamps_.begin(), next = std::next(it); next != image_stamps_.end(); it = next++)
+      intervals.push_back((*next - *it).toSec());
+    std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+    const double median = intervals[intervals.size() / 2];
+    return median > 0 ? 1.0 / median : 0;
   }
 
   // The CSVs; returns false when one cannot be written.
   bool finish() {
+    double fps = rate();
+    if (!waiting_overlays_.empty() && fps <= 0) {
+      std::printf("write_outputs: the input's frame rate is not known (fewer than two images seen): overlay.avi at %g fps\n",
+                  kFallbackFps);
+      fps = kFallbackFps;
+    }
+    writeOverlays(fps);
     overlay_.release();
+    const double frame_fps = fps > 0 ? fps : kFallbackFps;
     std::ofstream joints(out_dir_ + "/joints.csv"), boxes(out_dir_ + "/boxes.csv");
     if (!joints || !boxes) return false;
     joints << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
     boxes << "frame,x1,y1,x2,y2,body\n";
     int bodies = 0;
     for (const auto& [stamp, array] : poses_) {
-      const long frame = frameOf(stamp);
+      const long frame = frameOf(stamp, frame_fps);
       for (const kneed_walker::BodyPose& body : array.bodies) {
         ++bodies;
         for (size_t j = 0; j < body.joint_names.size() && j < body.joint_positions.size(); ++j) {
@@ -92,27 +126,51 @@ class OutputWriter {
       }
     }
     // Printed, not logged: rosout is gone once the node has shut down.
-    std::printf("write_outputs: %zu frames with %d poses in %s/joints.csv and boxes.csv, %d overlay frames in overlay.avi\n",
-                poses_.size(), bodies, out_dir_.c_str(), overlay_frames_);
+    std::printf("write_outputs: %zu frames with %d poses in %s/joints.csv and boxes.csv, %d overlay frames in "
+                "overlay.avi at %.3g fps (%s)\n",
+                poses_.size(), bodies, out_dir_.c_str(), overlay_frames_, overlay_fps_,
+                fps_ > 0 ? "--fps" : "from the input's stamps");
     return static_cast<bool>(joints) && static_cast<bool>(boxes);
   }
 
  private:
-  long frameOf(const ros::Time& stamp) const {
-    if (image_stamps_.empty()) return std::lround(stamp.toSec() * fps_);
+  // The overlay frames waiting for the video: written once the rate is known.
+  void writeOverlays(double fps) {
+    if (fps <= 0) return;
+    for (; !waiting_overlays_.empty(); waiting_overlays_.pop_front()) {
+      const cv::Mat& image = waiting_overlays_.front();
+      if (!overlay_.isOpened()) {
+        overlay_fps_ = fps;
+        overlay_.open(out_dir_ + "/overlay.avi", cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps,
+                      image.size());
+        if (!overlay_.isOpened()) ROS_ERROR("write_outputs: cannot write %s/overlay.avi", out_dir_.c_str());
+      }
+      if (overlay_.isOpened() && image.size() == overlay_size_.value_or(image.size())) {
+        overlay_size_ = image.size();
+        overlay_.write(image);
+        ++overlay_frames_;
+      }
+    }
+  }
+
+  // The input frame index of a stamp; `fps` numbers the stamps between the images seen.
+  long frameOf(const ros::Time& stamp, double fps) const {
+    if (image_stamps_.empty()) return std::lround(stamp.toSec() * fps);
     const auto at = image_stamps_.lower_bound(stamp);
     if (at != image_stamps_.end() && *at == stamp) return std::distance(image_stamps_.begin(), at);
     // Not seen: from the nearest image seen before it (or the first), by the frame interval.
     const auto before = at == image_stamps_.begin() ? at : std::prev(at);
-    return std::distance(image_stamps_.begin(), before) + std::lround((stamp - *before).toSec() * fps_);
+    return std::distance(image_stamps_.begin(), before) + std::lround((stamp - *before).toSec() * fps);
   }
 
-  std::string out_dir_;
+  std::string out_dir_, image_topic_;
   double fps_;
   std::set<ros::Time> image_stamps_;
   std::map<ros::Time, kneed_walker::BodyPoseArray> poses_;
   cv::VideoWriter overlay_;
   std::optional<cv::Size> overlay_size_;
+  std::deque<cv::Mat> waiting_overlays_;
+  double overlay_fps_ = 0;
   int overlay_frames_ = 0;
   ros::WallTime last_message_;
 };
@@ -128,10 +186,12 @@ int main(int argc, char** argv) {
   }();
   CLI::App app{"Writes the tracker nodelet's poses, image boxes and overlay into files as they are published."};
   std::string out_dir, tracker = "/kneed_walker", image_topic = "/camera/image_raw";
-  double fps = 7.0, idle_timeout_s = 0;
+  double fps = 0, idle_timeout_s = 0;
   app.add_option("--out-dir", out_dir, "directory for joints.csv, boxes.csv and overlay.avi (made if missing)")->required();
-  app.add_option("--fps", fps, "the input's frame rate (the overlay video's; numbers frames whose image was not seen)")
-      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0.1, 1000));
+  app.add_option("--fps", fps,
+                 "the input's frame rate (the overlay video's; numbers frames whose image was not seen); 0: from the "
+                 "input images' stamps")
+      ->capture_default_str()->check(kneed_walker::tools::FiniteRange(0, 1000));
   app.add_option("--tracker", tracker, "the tracker nodelet's name")->capture_default_str();
   app.add_option("--idle-timeout", idle_timeout_s,
                  "stop this many wall seconds after the last message, once messages came (0: at Ctrl-C only)")
@@ -151,7 +211,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   ros::NodeHandle nh;
-  OutputWriter writer(out_dir, fps);
+  OutputWriter writer(out_dir, fps, image_topic);
   ros::Subscriber images = nh.subscribe(image_topic, 100, &OutputWriter::onImage, &writer);
   ros::Subscriber poses = nh.subscribe(tracker + "/body_poses", 100, &OutputWriter::onPoses, &writer);
   ros::Subscriber overlay = nh.subscribe(tracker + "/overlay", 100, &OutputWriter::onOverlay, &writer);
