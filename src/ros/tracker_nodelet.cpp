@@ -399,7 +399,11 @@ void TrackerNodelet::process(const Frame& frame) {
   }
   std::string problem = frameProblem(*frame.image, *frame.info);
   if (!problem.empty()) return skipFrame(header, problem);
-  if (!last_stamp_.isZero() && header.stamp <= last_stamp_) {
+  // The same stamp again (a driver or relay that repeats a frame): skipped and counted, as
+  // track_offline skips it; the track goes on.
+  if (!last_stamp_.isZero() && header.stamp == last_stamp_)
+    return skipFrame(header, "its stamp is not after the previous frame's");
+  if (!last_stamp_.isZero() && header.stamp < last_stamp_) {
     // A bag that loops or was played again: the track starts over from this frame.
     NODELET_WARN("the image stamp went back from %.3f to %.3f s (a bag looped?): starting over", last_stamp_.toSec(),
                  header.stamp.toSec());
