@@ -57,6 +57,7 @@
 #include "kneed_walker/core/vision/overlay.h"
 #include "kneed_walker/ros/conversions.h"
 #include "kneed_walker/ros/parameters.h"
+#include "kneed_walker/ros/rate_diagnostic.h"
 
 namespace kneed_walker::ros_glue {
 
@@ -106,10 +107,9 @@ class TrackerNodelet : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  double expected_rate_min_hz_ = 1, expected_rate_max_hz_ = 120;
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> input_rate_, output_rate_;
+  std::unique_ptr<RateDiagnostic> input_rate_, output_rate_;
   std::unique_ptr<diagnostic_updater::TimeStampStatus> output_latency_;
-  ros::Timer diagnostics_timer_;
+  ros::WallTimer diagnostics_timer_;  // wall time: sim time stalls before the clock and when a bag loops
 
   // The frames waiting for the worker (oldest first, at most ~image_queue_size) and the
   // worker's stop flag.
@@ -208,16 +208,15 @@ void TrackerNodelet::onInit() {
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, private_nh, getName());
   diagnostics_->setHardwareID("camera");
   diagnostics_->add("tracker", this, &TrackerNodelet::reportDiagnostics);
-  input_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
-      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_hz_, &expected_rate_max_hz_), "input rate");
-  output_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
-      diagnostic_updater::FrequencyStatusParam(&expected_rate_min_hz_, &expected_rate_max_hz_), "output rate");
+  input_rate_ = std::make_unique<RateDiagnostic>("input rate", 1.0, 120.0);
+  output_rate_ = std::make_unique<RateDiagnostic>("output rate", 1.0, 120.0);
   output_latency_ = std::make_unique<diagnostic_updater::TimeStampStatus>(
       diagnostic_updater::TimeStampStatusParam(-1.0, 5.0), "output latency");
   diagnostics_->add(*input_rate_);
   diagnostics_->add(*output_rate_);
   diagnostics_->add(*output_latency_);
-  diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  diagnostics_timer_ =
+      nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
   num_particles_ = config_.tracker.filter.num_particles;
   // What may change while running starts from the parameters just validated (cfg/Tracker.cfg).
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TrackerConfig>>(private_nh);
