@@ -571,8 +571,11 @@ void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state
   {
     std::lock_guard<std::mutex> stats(stats_mutex_);
     status->processing_time = last_processing_s_;
+    status->frames_received = frames_received_;
     status->frames_processed = frames_processed_;
-    status->frames_skipped = frames_skipped_ + frames_dropped_;
+    status->frames_skipped = frames_skipped_;
+    status->frames_dropped = frames_dropped_;
+    status->frames_answered = frames_answered_;
   }
   status->message = message;
   status_publisher_.publish(status);

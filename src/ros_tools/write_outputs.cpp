@@ -1,7 +1,9 @@
 // write_outputs: a node that writes what the tracker nodelet publishes into files, for a run
 // through track.launch (its out_dir argument; scripts/demo): every tracked person's joints
 // from ~body_poses as CSV `frame,stamp,joint,x,y,z,body` (track_offline's format), their image
-// boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an MJPG video.
+// boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an MJPG video;
+// at the end it prints the tracker's last ~status counts (frames received, processed, skipped,
+// dropped, answered).
 // `frame` is the index of the input image, by stamp, among the images seen on the input topic
 // (a bag's frame number when the bag starts at its video's first frame); poses whose image was
 // not seen are numbered from the images around them by the input's frame interval. The files
@@ -33,6 +35,7 @@
 #include <vector>
 
 #include "kneed_walker/BodyPoseArray.h"
+#include "kneed_walker/TrackingStatus.h"
 #include "options.h"
 
 namespace {
@@ -57,6 +60,7 @@ class OutputWriter {
     last_message_ = ros::WallTime::now();
     poses_[poses->header.stamp] = *poses;
   }
+  void onStatus(const kneed_walker::TrackingStatusConstPtr& status) { status_ = status; }
   // Wall seconds since the last message; negative before the first.
   double idleS() const { return last_message_.isZero() ? -1 : (ros::WallTime::now() - last_message_).toSec(); }
   void onOverlay(const sensor_msgs::ImageConstPtr& image) {
@@ -130,6 +134,12 @@ class OutputWriter {
                 "overlay.avi at %.3g fps (%s)\n",
                 poses_.size(), bodies, out_dir_.c_str(), overlay_frames_, overlay_fps_,
                 fps_ > 0 ? "--fps" : "from the input's stamps");
+    if (status_)
+      std::printf("write_outputs: the tracker's counts: %lu frames received, %lu processed, %lu skipped (unusable), "
+                  "%lu dropped (arrived while busy), %lu answered\n",
+                  static_cast<unsigned long>(status_->frames_received), static_cast<unsigned long>(status_->frames_processed),
+                  static_cast<unsigned long>(status_->frames_skipped), static_cast<unsigned long>(status_->frames_dropped),
+                  static_cast<unsigned long>(status_->frames_answered));
     return static_cast<bool>(joints) && static_cast<bool>(boxes);
   }
 
@@ -173,6 +183,7 @@ class OutputWriter {
   double overlay_fps_ = 0;
   int overlay_frames_ = 0;
   ros::WallTime last_message_;
+  kneed_walker::TrackingStatusConstPtr status_;  // the tracker's last ~status
 };
 
 }  // namespace
@@ -215,6 +226,7 @@ int main(int argc, char** argv) {
   ros::Subscriber images = nh.subscribe(image_topic, 100, &OutputWriter::onImage, &writer);
   ros::Subscriber poses = nh.subscribe(tracker + "/body_poses", 100, &OutputWriter::onPoses, &writer);
   ros::Subscriber overlay = nh.subscribe(tracker + "/overlay", 100, &OutputWriter::onOverlay, &writer);
+  ros::Subscriber status = nh.subscribe(tracker + "/status", 10, &OutputWriter::onStatus, &writer);
   const ros::WallTimer idle = nh.createWallTimer(ros::WallDuration(0.5), [&](const ros::WallTimerEvent&) {
     if (idle_timeout_s > 0 && writer.idleS() > idle_timeout_s) ros::shutdown();
   });

@@ -182,6 +182,8 @@ TEST(TrackerNodelet, SkipsAndNamesBadFramesStartsOverAndTakesReconfiguration) {
     }
     EXPECT_EQ(last.frames_processed, processed) << c.what;
     EXPECT_EQ(last.frames_skipped, skipped) << c.what;
+    EXPECT_EQ(last.frames_received, last.frames_processed + last.frames_skipped + last.frames_dropped) << c.what;
+    EXPECT_EQ(last.frames_answered, 0u) << "learning the background: nothing answered yet";
   }
   // The last frame's stamp again: skipped and counted, nothing starts over.
   {
