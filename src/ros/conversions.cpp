@@ -190,6 +190,15 @@ std_msgs::ColorRGBA jointColour(core::body::BodyJoint joint) {
 
 BodyPose toBodyPose(const core::tracking::TrackEstimate& e, const std_msgs::Header& header, const std::string& body_id,
                     const cv::Rect2d& image_box_px, const cv::Size& image_size) {
+  BodyPose message = toBodyPose(e.pose, header, body_id, image_box_px, image_size);
+  message.root.pose.orientation = yawQuaternion(e.heading_rad);
+  message.root.covariance = rootCovariance(e);
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) message.joint_position_std[j] = e.joint_sd_m[j].norm();
+  return message;
+}
+
+BodyPose toBodyPose(const core::body::BodyPose& pose, const std_msgs::Header& header, const std::string& body_id,
+                    const cv::Rect2d& image_box_px, const cv::Size& image_size) {
   BodyPose message;
   message.header = header;
   message.body_id = body_id;
@@ -203,13 +212,12 @@ BodyPose toBodyPose(const core::tracking::TrackEstimate& e, const std_msgs::Head
     message.image_box.width = static_cast<uint32_t>(box.width);
     message.image_box.height = static_cast<uint32_t>(box.height);
   }
-  message.root.pose.position = toPoint(e.pose.joints[core::body::kWaist]);
-  message.root.pose.orientation = yawQuaternion(e.heading_rad);
-  message.root.covariance = rootCovariance(e);
+  message.root.pose.position = toPoint(pose.joints[core::body::kWaist]);
+  message.root.pose.orientation = yawQuaternion(std::atan2(pose.forward.y(), pose.forward.x()));
   for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
     message.joint_names.push_back(core::body::jointName(core::body::BodyJoint(j)));
-    message.joint_positions.push_back(toPoint(e.pose.joints[j]));
-    message.joint_position_std.push_back(e.joint_sd_m[j].norm());
+    message.joint_positions.push_back(toPoint(pose.joints[j]));
+    message.joint_position_std.push_back(0.0);
   }
   return message;
 }

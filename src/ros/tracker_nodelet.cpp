@@ -17,6 +17,10 @@
 //          (kneed_walker/BodyPoseArray, every person), ~status (kneed_walker/TrackingStatus,
 //          latched), ~particle_cloud (geometry_msgs/PoseArray, every person's, throttled),
 //          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
+//          ~body_poses_smoothed (kneed_walker/BodyPoseArray): the MAP poses of frame t − Δs
+//          (paper §4's fixed-lag smoother: the best particle's ancestry, resample_lag_frames
+//          behind) as each becomes final, and a track's last Δs frames when it ends; stamped with
+//          the frame each describes (track_offline --lagged writes the same poses).
 //
 // Threads: the subscriber callback only queues the frame for a worker thread and returns. Up
 // to ~image_queue_size frames wait; a frame arriving at a full queue pushes out the oldest,
@@ -85,6 +89,8 @@ class TrackerNodelet : public nodelet::Nodelet {
   // The prior's options with the torque noise scaled by ~prior_noise_scale.
   kw::prior::PriorOptions priorOptions() const;
   void publishAnswer(const kw::tracking::SessionAnswer& answer, const sensor_msgs::ImageConstPtr& image);
+  // ~body_poses_smoothed: the answer's MAP frames that became final, a message per frame.
+  void publishSmoothed(const kw::tracking::SessionAnswer& answer);
   void skipFrame(const std_msgs::Header& header, const std::string& reason);
   // `people`: tracks running after the frame (-1: the session's count now).
   void publishStatus(const std_msgs::Header& header, uint8_t state, const std::string& message,
@@ -101,7 +107,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   image_transport::CameraSubscriber camera_subscriber_;
   ros::Subscriber init_box_subscriber_;
   image_transport::Publisher overlay_publisher_;
-  ros::Publisher body_pose_publisher_, body_poses_publisher_, pose_publisher_, walker_state_publisher_,
+  ros::Publisher body_pose_publisher_, body_poses_publisher_, smoothed_poses_publisher_, pose_publisher_, walker_state_publisher_,
       status_publisher_, particle_cloud_publisher_, markers_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
@@ -137,6 +143,10 @@ class TrackerNodelet : public nodelet::Nodelet {
   std::string session_frame_id_;
   cv::Size session_size_;
   std::map<int, sensor_msgs::ImageConstPtr> unanswered_;  // frames held by the session
+  // The stamps of the last kKeptStamps frames fed, by the session's input index: the smoothed
+  // poses' stamps (they are at most resample_lag_frames old, or a track's held frames).
+  static constexpr size_t kKeptStamps = 1000;
+  std::map<int, ros::Time> fed_stamps_;
   ros::Time last_stamp_;
   ros::WallTime last_cloud_;
   std::mutex stats_mutex_;
@@ -188,6 +198,7 @@ void TrackerNodelet::onInit() {
   const uint32_t person_queue = queue * static_cast<uint32_t>(config_.session.max_people);
   body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", person_queue);
   body_poses_publisher_ = private_nh.advertise<BodyPoseArray>("body_poses", queue);
+  smoothed_poses_publisher_ = private_nh.advertise<BodyPoseArray>("body_poses_smoothed", queue);
   pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", person_queue);
   walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", person_queue);
   status_publisher_ = private_nh.advertise<TrackingStatus>("status", queue, /*latch=*/true);
@@ -313,6 +324,7 @@ void TrackerNodelet::workerLoop() {
       // starts over.
       if (session_) session_->reset();
       unanswered_.clear();
+      fed_stamps_.clear();
       skipFrame(frame.image->header, std::string("tracker error, starting over: ") + e.what());
     }
   }
@@ -335,6 +347,7 @@ std::string TrackerNodelet::prepareSession(const Frame& frame) {
   }
   session_.reset();
   unanswered_.clear();
+  fed_stamps_.clear();
   std::optional<kw::vision::Camera> camera = file_camera_;
   if (camera) {
     if (camera->width() != size.width || camera->height() != size.height)
@@ -392,6 +405,7 @@ void TrackerNodelet::process(const Frame& frame) {
                  config_.ros.prior_noise_scale);
     session_.reset();
     unanswered_.clear();
+    fed_stamps_.clear();
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++resets_;
     num_particles_ = particles;
@@ -408,6 +422,7 @@ void TrackerNodelet::process(const Frame& frame) {
                  header.stamp.toSec());
     if (session_) session_->reset();
     unanswered_.clear();
+    fed_stamps_.clear();
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++resets_;
   }
@@ -440,6 +455,8 @@ void TrackerNodelet::process(const Frame& frame) {
     return skipFrame(header, e.what());
   }
   unanswered_[session_->framesFed() - 1] = frame.image;
+  fed_stamps_[session_->framesFed() - 1] = header.stamp;
+  while (fed_stamps_.size() > kKeptStamps) fed_stamps_.erase(fed_stamps_.begin());
   {
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++frames_processed_;
@@ -520,6 +537,7 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     }
   }
   body_poses_publisher_.publish(poses);
+  publishSmoothed(answer);
   if (!cloud.poses.empty()) {
     last_cloud_ = now;
     particle_cloud_publisher_.publish(boost::make_shared<geometry_msgs::PoseArray>(std::move(cloud)));
@@ -541,6 +559,27 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
   if (state != TrackingStatus::TRACKING) return;
   output_rate_->tick();
   output_latency_->tick(header.stamp);
+}
+
+void TrackerNodelet::publishSmoothed(const kw::tracking::SessionAnswer& answer) {
+  std::map<int, BodyPoseArray::Ptr> by_input;  // in the order of the frames they describe
+  for (const kw::tracking::PersonAnswer& person : answer.people) {
+    const kw::tracking::Tracker& tracker = session_->tracker(person.body);
+    for (const kw::tracking::MapFrame& frame : person.map_frames) {
+      const auto stamp = fed_stamps_.find(frame.input);
+      if (stamp == fed_stamps_.end()) continue;  // older than the stamps kept (cannot happen within the lag)
+      BodyPoseArray::Ptr& poses = by_input[frame.input];
+      if (!poses) {
+        poses = boost::make_shared<BodyPoseArray>();
+        poses->header.stamp = stamp->second;
+        poses->header.frame_id = config_.ros.world_frame;
+      }
+      poses->bodies.push_back(toBodyPose(frame.pose, poses->header, std::to_string(person.body),
+                                         tracker.imageBox(frame.pose),
+                                         cv::Size(tracker.camera().width(), tracker.camera().height())));
+    }
+  }
+  for (const auto& [input, poses] : by_input) smoothed_poses_publisher_.publish(poses);
 }
 
 void TrackerNodelet::skipFrame(const std_msgs::Header& header, const std::string& reason) {

@@ -1,7 +1,9 @@
 // write_outputs: a node that writes what the tracker nodelet publishes into files, for a run
 // through track.launch (its out_dir argument; scripts/demo): every tracked person's joints
-// from ~body_poses as CSV `frame,stamp,joint,x,y,z,body` (track_offline's format), their image
-// boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an MJPG video;
+// from ~body_poses as CSV `frame,stamp,joint,x,y,z,body` (track_offline's format), the smoothed
+// ones from ~body_poses_smoothed as joints_smoothed.csv (as track_offline --lagged writes them),
+// their image boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an
+// MJPG video;
 // at the end it prints the tracker's last ~status counts (frames received, processed, skipped,
 // dropped, answered).
 // `frame` is the index of the input image, by stamp, among the images seen on the input topic
@@ -98,6 +100,11 @@ class OutputWriter {
     return median > 0 ? 1.0 / median : 0;
   }
 
+  void onSmoothedPoses(const kneed_walker::BodyPoseArrayConstPtr& poses) {
+    last_message_ = ros::WallTime::now();
+    smoothed_[poses->header.stamp] = *poses;
+  }
+
   // The CSVs; returns false when one cannot be written.
   bool finish() {
     double fps = rate();
@@ -109,20 +116,15 @@ class OutputWriter {
     writeOverlays(fps);
     overlay_.release();
     const double frame_fps = fps > 0 ? fps : kFallbackFps;
-    std::ofstream joints(out_dir_ + "/joints.csv"), boxes(out_dir_ + "/boxes.csv");
-    if (!joints || !boxes) return false;
-    joints << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+    std::ofstream joints(out_dir_ + "/joints.csv"), boxes(out_dir_ + "/boxes.csv"),
+        smoothed(out_dir_ + "/joints_smoothed.csv");
+    if (!joints || !boxes || !smoothed) return false;
     boxes << "frame,x1,y1,x2,y2,body\n";
-    int bodies = 0;
+    const int bodies = writeJoints(joints, poses_, frame_fps);
+    writeJoints(smoothed, smoothed_, frame_fps);
     for (const auto& [stamp, array] : poses_) {
       const long frame = frameOf(stamp, frame_fps);
       for (const kneed_walker::BodyPose& body : array.bodies) {
-        ++bodies;
-        for (size_t j = 0; j < body.joint_names.size() && j < body.joint_positions.size(); ++j) {
-          const geometry_msgs::Point& p = body.joint_positions[j];
-          joints << frame << ',' << stamp.toSec() << ',' << body.joint_names[j] << ',' << p.x << ',' << p.y << ','
-                 << p.z << ',' << body.body_id << '\n';
-        }
         const sensor_msgs::RegionOfInterest& b = body.image_box;
         if (b.width > 0 && b.height > 0)
           boxes << frame << ',' << b.x_offset << ',' << b.y_offset << ',' << b.x_offset + b.width << ','
@@ -130,9 +132,9 @@ class OutputWriter {
       }
     }
     // Printed, not logged: rosout is gone once the node has shut down.
-    std::printf("write_outputs: %zu frames with %d poses in %s/joints.csv and boxes.csv, %d overlay frames in "
-                "overlay.avi at %.3g fps (%s)\n",
-                poses_.size(), bodies, out_dir_.c_str(), overlay_frames_, overlay_fps_,
+    std::printf("write_outputs: %zu frames with %d poses in %s/joints.csv and boxes.csv, %zu smoothed frames in "
+                "joints_smoothed.csv, %d overlay frames in overlay.avi at %.3g fps (%s)\n",
+                poses_.size(), bodies, out_dir_.c_str(), smoothed_.size(), overlay_frames_, overlay_fps_,
                 fps_ > 0 ? "--fps" : "from the input's stamps");
     if (status_)
       std::printf("write_outputs: the tracker's counts: %lu frames received, %lu processed, %lu skipped (unusable), "
@@ -140,10 +142,29 @@ class OutputWriter {
                   static_cast<unsigned long>(status_->frames_received), static_cast<unsigned long>(status_->frames_processed),
                   static_cast<unsigned long>(status_->frames_skipped), static_cast<unsigned long>(status_->frames_dropped),
                   static_cast<unsigned long>(status_->frames_answered));
-    return static_cast<bool>(joints) && static_cast<bool>(boxes);
+    return static_cast<bool>(joints) && static_cast<bool>(boxes) && static_cast<bool>(smoothed);
   }
 
  private:
+  using PosesByStamp = std::map<ros::Time, kneed_walker::BodyPoseArray>;
+  // Joints as `frame,stamp,joint,x,y,z,body`, in order of frame and body; returns the poses written.
+  int writeJoints(std::ofstream& csv, const PosesByStamp& poses, double fps) const {
+    csv << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+    int bodies = 0;
+    for (const auto& [stamp, array] : poses) {
+      const long frame = frameOf(stamp, fps);
+      for (const kneed_walker::BodyPose& body : array.bodies) {
+        ++bodies;
+        for (size_t j = 0; j < body.joint_names.size() && j < body.joint_positions.size(); ++j) {
+          const geometry_msgs::Point& p = body.joint_positions[j];
+          csv << frame << ',' << stamp.toSec() << ',' << body.joint_names[j] << ',' << p.x << ',' << p.y << ','
+              << p.z << ',' << body.body_id << '\n';
+        }
+      }
+    }
+    return bodies;
+  }
+
   // The overlay frames waiting for the video: written once the rate is known.
   void writeOverlays(double fps) {
     if (fps <= 0) return;
@@ -176,7 +197,7 @@ class OutputWriter {
   std::string out_dir_, image_topic_;
   double fps_;
   std::set<ros::Time> image_stamps_;
-  std::map<ros::Time, kneed_walker::BodyPoseArray> poses_;
+  PosesByStamp poses_, smoothed_;
   cv::VideoWriter overlay_;
   std::optional<cv::Size> overlay_size_;
   std::deque<cv::Mat> waiting_overlays_;
@@ -227,6 +248,7 @@ int main(int argc, char** argv) {
   ros::Subscriber poses = nh.subscribe(tracker + "/body_poses", 100, &OutputWriter::onPoses, &writer);
   ros::Subscriber overlay = nh.subscribe(tracker + "/overlay", 100, &OutputWriter::onOverlay, &writer);
   ros::Subscriber status = nh.subscribe(tracker + "/status", 10, &OutputWriter::onStatus, &writer);
+  ros::Subscriber smoothed = nh.subscribe(tracker + "/body_poses_smoothed", 100, &OutputWriter::onSmoothedPoses, &writer);
   const ros::WallTimer idle = nh.createWallTimer(ros::WallDuration(0.5), [&](const ros::WallTimerEvent&) {
     if (idle_timeout_s > 0 && writer.idleS() > idle_timeout_s) ros::shutdown();
   });

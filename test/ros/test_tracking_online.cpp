@@ -2,7 +2,8 @@
 // test publishes the sequence's frames one at a time, waiting for each frame's ~status, and
 // checks (1) every frame was answered and none dropped, (2) the joints stay within the
 // offline tracker's loose bound of the ground truth, (3) track_offline on the same frames
-// and seed gives the same joints (to 1e-9 m).
+// and seed gives the same joints (to 1e-9 m), and its --lagged the same smoothed joints as
+// ~body_poses_smoothed.
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
@@ -64,6 +65,9 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   std::map<ros::Time, BodyPoseArray> arrays;
   ros::Subscriber array_sub = nh.subscribe<BodyPoseArray>("/kneed_walker/body_poses", 100,
                                                           [&](const BodyPoseArrayConstPtr& a) { arrays[a->header.stamp] = *a; });
+  std::map<ros::Time, BodyPoseArray> smoothed;
+  ros::Subscriber smoothed_sub = nh.subscribe<BodyPoseArray>(
+      "/kneed_walker/body_poses_smoothed", 100, [&](const BodyPoseArrayConstPtr& a) { smoothed[a->header.stamp] = *a; });
   ros::Subscriber status_sub = nh.subscribe<TrackingStatus>("/kneed_walker/status", 100, [&](const TrackingStatusConstPtr& s) {
     statuses[s->header.stamp] = *s;
     last = *s;
@@ -215,6 +219,41 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
               "mean joint error %.1f mm\n", images.size(), poses.size(), worst_difference_m, compared, mean_error_mm);
   EXPECT_LE(worst_difference_m, 1e-9);
   EXPECT_LT(mean_error_mm, 350.0);  // test/ros/check_tracking's loose bound
+
+  // The smoothed poses (the MAP at t − Δs as each becomes final): each frame
+  // ~body_poses_smoothed gave is track_offline --lagged's for the same frames and seed; it gave
+  // all of them but the last Δs + 1 of a track still running when the frames stopped (track_offline
+  // writes those at the end of its input).
+  const std::string lagged_csv = "/tmp/kneed_walker_tracking_online_lagged_" + std::to_string(getpid()) + ".csv";
+  std::string lagged_command = command;
+  lagged_command.replace(lagged_command.find("--filtered"), 10, "--lagged");
+  lagged_command.replace(lagged_command.find(csv), csv.size(), lagged_csv);
+  ASSERT_EQ(std::system((lagged_command + " > /dev/null").c_str()), 0) << lagged_command;
+  std::map<int, std::map<std::string, JointRow>> lagged_by_frame;
+  for (const JointRow& row : readJoints(lagged_csv)) lagged_by_frame[row.frame][row.joint] = row;
+  std::remove(lagged_csv.c_str());
+  ASSERT_FALSE(lagged_by_frame.empty());
+  double worst_smoothed_m = 0;
+  int smoothed_frames = 0;
+  for (size_t f = 0; f < images.size(); ++f) {
+    const auto online = smoothed.find(images[f]->header.stamp);
+    if (online == smoothed.end()) continue;
+    ++smoothed_frames;
+    ASSERT_TRUE(lagged_by_frame.count(static_cast<int>(f))) << "frame " << f << " smoothed online, not by --lagged";
+    ASSERT_EQ(online->second.bodies.size(), 1u) << "frame " << f;
+    const BodyPose& body = online->second.bodies[0];
+    for (size_t j = 0; j < body.joint_names.size(); ++j) {
+      const JointRow& o = lagged_by_frame[static_cast<int>(f)].at(body.joint_names[j]);
+      const geometry_msgs::Point& p = body.joint_positions[j];
+      worst_smoothed_m = std::max({worst_smoothed_m, std::abs(p.x - o.x), std::abs(p.y - o.y), std::abs(p.z - o.z)});
+    }
+  }
+  const int lag = 3;  // config/tracker.yaml's resample_lag_frames
+  std::printf("smoothed: %d frames online, %zu by track_offline --lagged; largest difference %.3g m\n", smoothed_frames,
+              lagged_by_frame.size(), worst_smoothed_m);
+  EXPECT_GE(smoothed_frames + lag + 1, static_cast<int>(lagged_by_frame.size()));
+  EXPECT_GT(smoothed_frames, 0);
+  EXPECT_LE(worst_smoothed_m, 1e-9);
 
   // The bag again, as `rosbag play -l` sends it: the stamps go back, the nodelet starts over
   // (learns the background again, finds the person again) and, with the same seed, tracks

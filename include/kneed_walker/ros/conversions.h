@@ -59,6 +59,10 @@ core::vision::Camera toCamera(const sensor_msgs::CameraInfo& info, const geometr
 // the image of `image_size`.
 BodyPose toBodyPose(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
                     const std::string& body_id, const cv::Rect2d& image_box_px, const cv::Size& image_size);
+// A pose without the particles' spread (the smoothed MAP pose): root covariance and joint
+// standard deviations zero, the root turned to the walking direction.
+BodyPose toBodyPose(const core::body::BodyPose& pose, const std_msgs::Header& header, const std::string& body_id,
+                    const cv::Rect2d& image_box_px, const cv::Size& image_size);
 // The mid-hip and walking direction with the particles' spread (as amcl's ~amcl_pose).
 geometry_msgs::PoseWithCovarianceStamped toPose(const core::tracking::TrackEstimate& estimate,
                                                 const std_msgs::Header& header);
