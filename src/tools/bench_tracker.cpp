@@ -1,6 +1,8 @@
 // bench_tracker: how fast the tracker runs. Renders a synthetic walk in memory (the prior's
 // walker over a textured ground seen by the given camera, 768×576 for the PETS calibration,
-// `--fps` frames per second), learns its background, then tracks it from a coarse start with
+// `--fps` frames per second, starting on the ground under `--start-pixel`: the person's image
+// height there is printed as person_px=, since the likelihood's cost grows with the rows a body
+// covers), learns its background, then tracks it from a coarse start with
 // `--particles` particles on 1 thread and on all cores. Prints medians over the tracked frames:
 //   tracker_ms_per_frame=       wall time per frame
 //   per_frame_precompute_ms=    the frame's shared evidence (ratio maps, prefix sums, flow)
@@ -13,9 +15,12 @@
 //                               the mean wall time per frame, resampling frames included
 //
 //   rosrun kneed_walker bench_tracker --camera ../shared/data/pets2009/View_001_camera.yml
-//          [--particles 5000] [--frames 40] [--fps 30]
+//          [--particles 5000] [--frames 40] [--fps 30] [--start-pixel X Y]
+//   (a robot's camera with a person ~200 px tall: --camera test/sequences/robot_eye_camera.yml
+//    --start-pixel 330 330)
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <numeric>
 #include <vector>
@@ -49,14 +54,24 @@ int main(int argc, char** argv) {
   app.add_option("--table", table_path, "the prior's gait table")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--prior", prior_path, "prior parameters")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--walker-model", walker_model, "body proportions")->check(CLI::ExistingFile)->capture_default_str();
+  std::vector<double> start_px;
+  app.add_option("--start-pixel", start_px, "the image point over the walk's start on the ground, px (default: 70 % "
+                 "across, 80 % down)")->expected(2)->check(FiniteRange(0, 1e5));
   CLI11_PARSE(app, argc, argv);
   try {
     const kw::vision::Camera camera = kneed_walker::tools::loadCamera("bench_tracker", camera_path, camera_unit_m);
     const kw::gait::GaitTable table = kw::gait::loadGaitTable(table_path, kw::dynamics::loadBodyProportions(walker_model));
     const kw::prior::PriorOptions prior = kw::prior::loadPriorOptions(prior_path);
     kw::synthetic::SyntheticWalkOptions walk_options;
-    const auto start = camera.groundPoint({0.7 * camera.width(), 0.8 * camera.height()});
-    if (!start) throw std::runtime_error("the camera does not see the ground at the walk's start");
+    const Eigen::Vector2d start_pixel = start_px.empty() ? Eigen::Vector2d(0.7 * camera.width(), 0.8 * camera.height())
+                                                         : Eigen::Vector2d(start_px[0], start_px[1]);
+    const auto start = camera.groundPoint(start_pixel);
+    if (!start) {
+      char text[128];
+      std::snprintf(text, sizeof text, "--start-pixel %g %g: the camera does not see the ground there", start_pixel.x(),
+                    start_pixel.y());
+      throw std::runtime_error(text);
+    }
     walk_options.start_m = start->head<2>();
     walk_options.heading_rad = 2.1;
     walk_options.fps = fps;
@@ -80,8 +95,11 @@ int main(int argc, char** argv) {
     guess.heading_rad = walk_options.heading_rad;
     guess.stance_leg = walk.frames[0].walker.stance_leg;
 
-    std::printf("%d particles, %zu frames of %dx%d at %.0f fps\n", particles, images.size(), camera.width(),
-                camera.height(), fps);
+    double top_px = 1e9, bottom_px = -1e9;  // the person's first pose, head to feet
+    for (const Eigen::Vector3d& joint : walk.frames[0].pose.joints)
+      if (const auto px = camera.project(joint)) top_px = std::min(top_px, px->y()), bottom_px = std::max(bottom_px, px->y());
+    std::printf("%d particles, %zu frames of %dx%d at %.0f fps, person_px=%.0f (head centre to ankles)\n", particles,
+                images.size(), camera.width(), camera.height(), fps, bottom_px - top_px);
     const int cores = kw::common::resolveThreads(0);
     for (int threads : {1, cores}) {
       kw::tracking::TrackerOptions options;
