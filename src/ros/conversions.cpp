@@ -258,25 +258,30 @@ WalkerState toWalkerState(const core::tracking::TrackEstimate& e, const std_msgs
 
 std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::TrackEstimate& e,
                                                           const std_msgs::Header& header, const std::string& body_id) {
+  return toTransforms(e.pose, e.heading_rad, header, body_id);
+}
+
+std::vector<geometry_msgs::TransformStamped> toTransforms(const core::body::BodyPose& pose, double heading_rad,
+                                                          const std_msgs::Header& header, const std::string& body_id) {
   std::vector<geometry_msgs::TransformStamped> transforms;
   const std::string root = "body_" + body_id;
   geometry_msgs::TransformStamped body;
   body.header = header;
   body.child_frame_id = root;
-  const Eigen::Vector3d& waist = e.pose.joints[core::body::kWaist];
+  const Eigen::Vector3d& waist = pose.joints[core::body::kWaist];
   body.transform.translation.x = waist.x();
   body.transform.translation.y = waist.y();
   body.transform.translation.z = waist.z();
-  body.transform.rotation = yawQuaternion(e.heading_rad);
+  body.transform.rotation = yawQuaternion(heading_rad);
   transforms.push_back(body);
-  const Eigen::Matrix3d world_to_body = Eigen::AngleAxisd(e.heading_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
+  const Eigen::Matrix3d world_to_body = Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
   for (int j = 0; j < core::body::kNumBodyJoints; ++j) {
     if (j == core::body::kWaist) continue;  // body_<id> is the mid-hip
     geometry_msgs::TransformStamped joint;
     joint.header.stamp = header.stamp;
     joint.header.frame_id = root;
     joint.child_frame_id = std::string(core::body::jointName(core::body::BodyJoint(j))) + "_" + body_id;
-    const Eigen::Vector3d offset = world_to_body * (e.pose.joints[j] - waist);
+    const Eigen::Vector3d offset = world_to_body * (pose.joints[j] - waist);
     joint.transform.translation.x = offset.x();
     joint.transform.translation.y = offset.y();
     joint.transform.translation.z = offset.z();

@@ -20,7 +20,8 @@
 //          ~body_poses_smoothed (kneed_walker/BodyPoseArray): the MAP poses of frame t − Δs
 //          (paper §4's fixed-lag smoother: the best particle's ancestry, resample_lag_frames
 //          behind) as each becomes final, and a track's last Δs frames when it ends; stamped with
-//          the frame each describes (track_offline --lagged writes the same poses).
+//          the frame each describes (track_offline --lagged writes the same poses), and as /tf
+//          frames with the suffix _smoothed (body_<id>_smoothed, l_knee_<id>_smoothed, ...).
 //
 // Threads: the subscriber callback only queues the frame for a worker thread and returns. Up
 // to ~image_queue_size frames wait; a frame arriving at a full queue pushes out the oldest,
@@ -577,6 +578,9 @@ void TrackerNodelet::publishSmoothed(const kw::tracking::SessionAnswer& answer) 
       poses->bodies.push_back(toBodyPose(frame.pose, poses->header, std::to_string(person.body),
                                          tracker.imageBox(frame.pose),
                                          cv::Size(tracker.camera().width(), tracker.camera().height())));
+      if (publishing_.publish_tf)
+        tf_broadcaster_->sendTransform(toTransforms(frame.pose, std::atan2(frame.pose.forward.y(), frame.pose.forward.x()),
+                                                    poses->header, std::to_string(person.body) + "_smoothed"));
     }
   }
   for (const auto& [input, poses] : by_input) smoothed_poses_publisher_.publish(poses);

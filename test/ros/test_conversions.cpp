@@ -201,5 +201,34 @@ TEST(MarkerConversion, DrawsTheSkeletonAndEveryPartAsItsCylinder) {
   }
 }
 
+// The smoothed pose's tf frames: body_<id>_smoothed at the mid-hip turned to the walking
+// direction, each joint under it (REP 155 names with the suffix) where the pose has it.
+TEST(TransformConversion, APoseGivesSuffixedFramesAtItsJoints) {
+  core::body::BodyPose pose;
+  for (int j = 0; j < core::body::kNumBodyJoints; ++j) pose.joints[j] = Eigen::Vector3d(1.0 + 0.1 * j, 2.0, 0.05 * j);
+  const double heading = 0.7;
+  std_msgs::Header header;
+  header.frame_id = "world";
+  header.stamp = ros::Time(5.0);
+  const std::vector<geometry_msgs::TransformStamped> transforms = toTransforms(pose, heading, header, "1_smoothed");
+  ASSERT_EQ(transforms.size(), static_cast<size_t>(core::body::kNumBodyJoints));
+  EXPECT_EQ(transforms[0].child_frame_id, "body_1_smoothed");
+  EXPECT_EQ(transforms[0].header.frame_id, "world");
+  const Eigen::Vector3d& waist = pose.joints[core::body::kWaist];
+  EXPECT_NEAR(transforms[0].transform.translation.x, waist.x(), 1e-12);
+  for (size_t i = 1; i < transforms.size(); ++i) {
+    const geometry_msgs::TransformStamped& t = transforms[i];
+    EXPECT_EQ(t.header.frame_id, "body_1_smoothed");
+    EXPECT_EQ(t.header.stamp, header.stamp);
+    EXPECT_NE(t.child_frame_id.find("_1_smoothed"), std::string::npos) << t.child_frame_id;
+    int j = 0;
+    while (std::string(core::body::jointName(core::body::BodyJoint(j))) + "_1_smoothed" != t.child_frame_id) ++j;
+    // Back to the world: the body frame's yaw, then the mid-hip.
+    const Eigen::Vector3d offset(t.transform.translation.x, t.transform.translation.y, t.transform.translation.z);
+    const Eigen::Vector3d world = waist + Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) * offset;
+    EXPECT_NEAR((world - pose.joints[j]).norm(), 0.0, 1e-12) << t.child_frame_id;
+  }
+}
+
 }  // namespace
 }  // namespace kneed_walker::ros_glue

@@ -70,6 +70,10 @@ WalkerState toWalkerState(const core::tracking::TrackEstimate& estimate, const s
 // world -> body_<id>, and body_<id> -> each joint's frame.
 std::vector<geometry_msgs::TransformStamped> toTransforms(const core::tracking::TrackEstimate& estimate,
                                                           const std_msgs::Header& header, const std::string& body_id);
+// The same for a pose walking along `heading_rad` (the smoothed MAP pose: body_id "1_smoothed"
+// names its frames body_1_smoothed, l_knee_1_smoothed, ...).
+std::vector<geometry_msgs::TransformStamped> toTransforms(const core::body::BodyPose& pose, double heading_rad,
+                                                          const std_msgs::Header& header, const std::string& body_id);
 // The skeleton (bones as lines, joints as spheres) and the body's parts as the likelihood sees
 // them (the tapered elliptical cylinders of `shape`, a triangle mesh of kPartMeshSides sides
 // each, half transparent), coloured left, right and trunk; they expire after `lifetime_s` so a
