@@ -38,6 +38,7 @@
 
 #include "kneed_walker/BodyPoseArray.h"
 #include "kneed_walker/TrackingStatus.h"
+#include "median.h"
 #include "options.h"
 
 namespace {
@@ -95,9 +96,8 @@ class OutputWriter {
     std::vector<double> intervals;
     for (auto it = image_stamps_.begin(), next = std::next(it); next != image_stamps_.end(); it = next++)
       intervals.push_back((*next - *it).toSec());
-    std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-    const double median = intervals[intervals.size() / 2];
-    return median > 0 ? 1.0 / median : 0;
+    const double interval_s = kneed_walker::tools::median(std::move(intervals));
+    return interval_s > 0 ? 1.0 / interval_s : 0;
   }
 
   void onSmoothedPoses(const kneed_walker::BodyPoseArrayConstPtr& poses) {

@@ -21,13 +21,25 @@ namespace kneed_walker::ros_glue {
 namespace {
 
 const std::string kShared = KNEED_WALKER_SHARED_DIR;
+const std::string kVideo = kShared + "/data/pets2009/vtest.avi";
+const std::string kCalibration = kShared + "/data/pets2009/View_001_camera.yml";
+
+// video_to_bag on the PETS video with `options`, into the temporary directory's `name`.
+struct BagRun {
+  std::string out, command;
+};
+BagRun petsToBag(const std::string& name, const std::string& options) {
+  BagRun run;
+  run.out = (std::filesystem::temp_directory_path() / name).string();
+  run.command = std::string(KNEED_WALKER_VIDEO_TO_BAG) + " --video " + kVideo + " --camera " + kCalibration + " --out " +
+                run.out + " " + options + " > /dev/null";
+  return run;
+}
 
 TEST(VideoToBag, WritesTheFramesAtTheAskedRateWithTheCalibratedCamera) {
-  const std::string video = kShared + "/data/pets2009/vtest.avi", calibration = kShared + "/data/pets2009/View_001_camera.yml";
-  const std::string out = (std::filesystem::temp_directory_path() / "kneed_walker_video_to_bag_test.bag").string();
-  const std::string command = std::string(KNEED_WALKER_VIDEO_TO_BAG) + " --video " + video + " --camera " + calibration +
-                              " --out " + out + " --first-frame 600 --frames 10 --fps 7 > /dev/null";
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const BagRun run = petsToBag("kneed_walker_video_to_bag_test.bag", "--first-frame 600 --frames 10 --fps 7");
+  ASSERT_EQ(std::system(run.command.c_str()), 0) << run.command;
+  const std::string& out = run.out;
 
   std::vector<sensor_msgs::Image::ConstPtr> images;
   std::vector<sensor_msgs::CameraInfo::ConstPtr> infos;
@@ -51,7 +63,7 @@ TEST(VideoToBag, WritesTheFramesAtTheAskedRateWithTheCalibratedCamera) {
   ASSERT_EQ(tf_static.size(), 1u);
   EXPECT_TRUE(latched) << "/tf_static is not on a latched connection";
   // The frames are the video's own, 1/7 s apart.
-  cv::VideoCapture capture(video);
+  cv::VideoCapture capture(kVideo);
   cv::Mat frame;
   for (int skipped = 0; skipped <= 600; ++skipped) ASSERT_TRUE(capture.read(frame));
   const cv::Mat first = cv_bridge::toCvCopy(images[0], "bgr8")->image;
@@ -62,7 +74,7 @@ TEST(VideoToBag, WritesTheFramesAtTheAskedRateWithTheCalibratedCamera) {
     EXPECT_EQ(frameProblem(*images[i], *infos[i]), "");
   }
   // The camera from camera_info and /tf_static projects as the calibration file's.
-  const core::vision::Camera file_camera = core::vision::Camera::load(calibration, 0.001);
+  const core::vision::Camera file_camera = core::vision::Camera::load(kCalibration, 0.001);
   const core::vision::Camera bag_camera = toCamera(*infos[0], tf_static[0]->transforms.at(0));
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(-15, -14, 1.7), Eigen::Vector3d(5, -20, 0.5)}) {
     const auto a = file_camera.project(p), b = bag_camera.project(p);
@@ -74,11 +86,9 @@ TEST(VideoToBag, WritesTheFramesAtTheAskedRateWithTheCalibratedCamera) {
 // Without --fps the frames are stamped at the video's own rate (the PETS AVI says 10 frames a
 // second), never at a rate of the tool's.
 TEST(VideoToBag, StampsAtTheVideosRateByDefault) {
-  const std::string video = kShared + "/data/pets2009/vtest.avi", calibration = kShared + "/data/pets2009/View_001_camera.yml";
-  const std::string out = (std::filesystem::temp_directory_path() / "kneed_walker_video_to_bag_rate.bag").string();
-  const std::string command = std::string(KNEED_WALKER_VIDEO_TO_BAG) + " --video " + video + " --camera " + calibration +
-                              " --out " + out + " --frames 3 > /dev/null";
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const BagRun run = petsToBag("kneed_walker_video_to_bag_rate.bag", "--frames 3");
+  ASSERT_EQ(std::system(run.command.c_str()), 0) << run.command;
+  const std::string& out = run.out;
   std::vector<double> stamps;
   {
     rosbag::Bag bag(out, rosbag::bagmode::Read);
@@ -87,7 +97,7 @@ TEST(VideoToBag, StampsAtTheVideosRateByDefault) {
   }
   std::filesystem::remove(out);
   ASSERT_EQ(stamps.size(), 3u);
-  EXPECT_NEAR(stamps[1] - stamps[0], 1.0 / cv::VideoCapture(video).get(cv::CAP_PROP_FPS), 1e-6);
+  EXPECT_NEAR(stamps[1] - stamps[0], 1.0 / cv::VideoCapture(kVideo).get(cv::CAP_PROP_FPS), 1e-6);
   EXPECT_NEAR(stamps[2] - stamps[1], 0.1, 1e-6);
 }
 
