@@ -193,16 +193,18 @@ Eigen::Isometry3d placeCaptured(const CapturedMotion& motion, const CapturedPlac
   const Eigen::Vector2d travel = (last - first).head<2>();
   const double turn = placement.heading_rad - (travel.norm() > 1e-6 ? std::atan2(travel.y(), travel.x()) : 0.0);
   double lowest = std::numeric_limits<double>::infinity();
-  for (const char* foot : {"Foot_L", "Foot_R", "Toes_L", "Toes_R"}) {
-    const int j = motion.index(foot);
-    for (const auto& p : motion.positions_m) lowest = std::min(lowest, p[j].z());
+  const CapturedFigure figure;
+  for (const char* side : {"_L", "_R"}) {
+    const int ankle = motion.index(std::string("Foot") + side), toes = motion.index(std::string("Toes") + side);
+    for (const auto& p : motion.positions_m)
+      lowest = std::min({lowest, p[toes].z(), capturedHeel(p[ankle], p[toes], figure).z()});
   }
   Eigen::Isometry3d world = Eigen::Isometry3d::Identity();
   world.linear() = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d turned = world.linear() * first;
-  // The lowest foot joint stands a drawn foot's radius above the ground.
+  // The lowest toe or heel stands a drawn foot's radius above the ground.
   world.translation() = Eigen::Vector3d(placement.start_m.x() - turned.x(), placement.start_m.y() - turned.y(),
-                                        CapturedFigure{}.foot_radius_m - lowest);
+                                        figure.foot_radius_m - lowest);
   return world;
 }
 
@@ -226,6 +228,13 @@ body::BodyPose capturedBodyPose(const CapturedMotion& motion, const std::vector<
   pose.up = Eigen::Vector3d::UnitZ();
   pose.left = pose.up.cross(pose.forward);
   return pose;
+}
+
+Eigen::Vector3d capturedHeel(const Eigen::Vector3d& ankle, const Eigen::Vector3d& toes, const CapturedFigure& figure) {
+  const Eigen::Vector3d along = (toes - ankle).normalized();
+  Eigen::Vector3d down = -Eigen::Vector3d::UnitZ() + along.z() * along;  // −Z made square to the foot
+  if (down.norm() < 1e-9) down = -along.cross(Eigen::Vector3d::UnitX());   // a vertical foot: any square direction
+  return ankle + figure.heel_below_ankle_m * down.normalized();
 }
 
 CapturedFigure capturedFigure(std::uint64_t seed) {
@@ -266,7 +275,9 @@ void drawCapturedPerson(cv::Mat& image, const vision::Camera& camera, const Capt
                         figure.bottom});
     segments.push_back({joint("LowerLeg"), joint("Foot"), figure.shank_radius_m * b, 0.8 * figure.shank_radius_m * b,
                         figure.bottom});
-    segments.push_back({joint("Foot"), joint("Toes"), figure.foot_radius_m, 0.8 * figure.foot_radius_m, figure.shoes});
+    const Eigen::Vector3d heel = capturedHeel(joint("Foot"), joint("Toes"), figure);
+    segments.push_back({joint("Foot"), heel, figure.foot_radius_m, figure.foot_radius_m, figure.shoes});
+    segments.push_back({heel, joint("Toes"), figure.foot_radius_m, 0.8 * figure.foot_radius_m, figure.shoes});
     segments.push_back({joint("UpperArm"), joint("LowerArm"), figure.upper_arm_radius_m * b,
                         0.85 * figure.upper_arm_radius_m * b, figure.top});
     segments.push_back({joint("LowerArm"), joint("Hand"), figure.forearm_radius_m * b, 0.8 * figure.forearm_radius_m * b,

@@ -36,7 +36,7 @@ TEST(CapturedWalk, ReadsABvhWalkWithRigidBones) {
 }
 
 // Placed at a start and heading, the walk's first mid-hip stands over the start, it travels
-// along the heading, and its lowest foot joint is a foot's radius above the ground; the truth's
+// along the heading, and its lowest toe or heel is a foot's radius above the ground; the truth's
 // joints are the mapped ones, the head's centre above the neck.
 TEST(CapturedWalk, IsPlacedWhereAskedAndMappedToTheBodysJoints) {
   const CapturedMotion motion = loadBvh(kMocap + "/dataset-1_walk_normal_001.bvh");
@@ -55,11 +55,28 @@ TEST(CapturedWalk, IsPlacedWhereAskedAndMappedToTheBodysJoints) {
   const body::BodyPose end = capturedBodyPose(motion, last, forward);
   const Eigen::Vector2d travel = (end.joints[body::kWaist] - pose.joints[body::kWaist]).head<2>();
   EXPECT_NEAR(std::atan2(travel.y(), travel.x()), 1.0, 1e-9);
+  // The drawn feet: the lowest toe or heel of the walk a foot's radius up. Each foot stands on
+  // its heel as on its toes (a flat foot, not tiptoe): at the frames where its ankle is lowest
+  // (mid-stance) its heel is within 2 cm of the walk's lowest.
+  const CapturedFigure figure;
   double lowest = 1e9;
-  for (size_t f = 0; f < motion.positions_m.size(); ++f)
-    for (const char* foot : {"Foot_L", "Foot_R", "Toes_L", "Toes_R"})
-      lowest = std::min(lowest, (place * motion.positions_m[f][motion.index(foot)]).z());
-  EXPECT_NEAR(lowest, 0.045, 1e-9);
+  for (const char* side : {"_L", "_R"}) {
+    const int ankle = motion.index(std::string("Foot") + side), toes = motion.index(std::string("Toes") + side);
+    for (size_t f = 0; f < motion.positions_m.size(); ++f) {
+      const std::vector<Eigen::Vector3d>& p = motion.positions_m[f];
+      lowest = std::min({lowest, (place * p[toes]).z(), (place * capturedHeel(p[ankle], p[toes], figure)).z()});
+    }
+  }
+  EXPECT_NEAR(lowest, figure.foot_radius_m, 1e-9);
+  for (const char* side : {"_L", "_R"}) {
+    const int ankle = motion.index(std::string("Foot") + side), toes = motion.index(std::string("Toes") + side);
+    size_t stance = 0;
+    for (size_t f = 0; f < motion.positions_m.size(); ++f)
+      if (motion.positions_m[f][ankle].z() < motion.positions_m[stance][ankle].z()) stance = f;
+    const std::vector<Eigen::Vector3d>& p = motion.positions_m[stance];
+    EXPECT_LT((place * capturedHeel(p[ankle], p[toes], figure)).z() - lowest, 0.02) << side;
+    EXPECT_GT((place * p[ankle]).z() - lowest, 0.05) << side << ": the ankle stands above the heel";
+  }
   EXPECT_EQ(pose.joints[body::kLeftKnee], first[motion.index("LowerLeg_L")]);
   EXPECT_NEAR((pose.joints[body::kHead] - first[motion.index("Head")]).norm(), kHeadCentreAboveHeadJoint_m, 1e-9);
   EXPECT_GT(pose.joints[body::kHead].z(), first[motion.index("Head")].z());

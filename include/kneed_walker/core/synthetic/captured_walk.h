@@ -38,8 +38,9 @@ std::vector<Eigen::Vector3d> jointsAt(const CapturedMotion& motion, double t_s);
 
 // How a captured walk is placed in a scene: rotated about the vertical so that its overall
 // direction of travel (first to last frame of its mid-hip) is `heading_rad`, and moved so that
-// its first frame's mid-hip stands over `start_m`; its lowest foot joint over the whole walk a drawn
-// foot's radius (CapturedFigure::foot_radius_m) above Z = 0.
+// its first frame's mid-hip stands over `start_m`; the lowest point of its drawn feet (toes and
+// heels, capturedHeel) over the whole walk a drawn foot's radius (CapturedFigure::foot_radius_m)
+// above Z = 0.
 struct CapturedPlacement {
   Eigen::Vector2d start_m = Eigen::Vector2d::Zero();
   double heading_rad = 0;
@@ -64,9 +65,17 @@ struct CapturedFigure {
   double breadth_scale = 1.0;  // of the limbs' and torso's widths below
   double torso_half_width_m = 0.17, thigh_radius_m = 0.075, shank_radius_m = 0.05;
   double upper_arm_radius_m = 0.045, forearm_radius_m = 0.035, foot_radius_m = 0.045;
+  // The heel's centre below the ankle, square to the foot's axis: the capture's ankles stand
+  // 0.12 m above its toes' soles, and a foot drawn from the ankle to the toes alone walks on
+  // tiptoe, its heel 7 cm in the air.
+  double heel_below_ankle_m = 0.08;
   double head_radius_m = 0.11;
   cv::Scalar skin, top, bottom, shoes;
 };
+// The drawn heel's centre for a foot's ankle and toes joints (world, Z up): heel_below_ankle_m
+// from the ankle, square to the ankle-to-toes axis in its vertical plane, downwards.
+Eigen::Vector3d capturedHeel(const Eigen::Vector3d& ankle, const Eigen::Vector3d& toes, const CapturedFigure& figure);
+
 // A figure of a seed: breadth 0.8-1.5 and colours varied.
 CapturedFigure capturedFigure(std::uint64_t seed);
 
