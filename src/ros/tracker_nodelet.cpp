@@ -401,6 +401,7 @@ void TrackerNodelet::process(const Frame& frame) {
     // The session is made again at this frame.
     const int particles = publishing_.num_particles;
     config_.tracker.filter.num_particles = particles;
+    config_.tracker.min_particles = std::min(config_.ros.min_particles, particles);
     config_.ros.prior_noise_scale = publishing_.prior_noise_scale;
     NODELET_INFO("reconfigured: starting over with %d particles, prior noise x%g", particles,
                  config_.ros.prior_noise_scale);
@@ -490,7 +491,10 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     std::lock_guard<std::mutex> stats(stats_mutex_);
     ++frames_answered_;
     state_name_ = kw::tracking::stateName(answer.state);
-    if (first) last_effective_sample_size_ = first->effective_sample_size;
+    if (first) {
+      last_effective_sample_size_ = first->effective_sample_size;
+      num_particles_ = first->num_particles;
+    }
     people_tracked_ = session_->trackCount();
     for (const kw::tracking::PersonAnswer& person : answer.people) tracks_started_ += person.started;
   }
@@ -604,7 +608,8 @@ void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state
   status->header.stamp = header.stamp;
   status->header.frame_id = config_.ros.world_frame;
   status->state = state;
-  status->num_particles = static_cast<uint32_t>(config_.tracker.filter.num_particles);
+  status->num_particles =
+      static_cast<uint32_t>(estimate ? estimate->num_particles : config_.tracker.filter.num_particles);
   status->people_tracked = static_cast<uint32_t>(people >= 0 ? people : session_ ? session_->trackCount() : 0);
   if (estimate) {
     status->effective_sample_size = estimate->effective_sample_size;

@@ -24,6 +24,10 @@ struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
   std::string image_transport = "raw";  // raw or compressed (image_transport plugins)
   int image_queue_size = 1;           // frames waiting while one is tracked; a full queue drops its oldest (counted)
+  // Each frame's tracking fits into this fraction of the frame interval (from the stamps): the
+  // particle count adapts within [min_particles, num_particles] (TrackerOptions, which gets them).
+  double frame_budget_fraction = 0.8;
+  int min_particles = 500;
   bool publish_particle_cloud = true;  // ~particle_cloud (geometry_msgs/PoseArray)
   double particle_cloud_interval_s = 0.5;  // at most one ~particle_cloud per this interval, s
   bool publish_tf = true;              // body_<id> and joint frames on /tf

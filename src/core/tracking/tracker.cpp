@@ -306,6 +306,8 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   const auto started_at = Clock::now();
   if (!guess.same_person || appearance_.empty()) learnAppearance(bgr, guess);
   filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(options_.filter);
+  // A track started again within a frame budget searches with the count it allows.
+  if (options_.frame_budget_fraction > 0 && cost_.measured) filter_->setParticleCount(cost_.count);
   frame_ = 0;
   stamp_s_ = stamp_s;
   loss_ = TrackLossDetector(options_.lost_likelihood_fraction);
@@ -424,6 +426,7 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   timing_.particle_steps = steps_;
   loss_.update(report.max_log_likelihood);
   timing_.total_ms = msSince(started_at);
+  if (options_.frame_budget_fraction > 0) fitParticleCount(report.resampled);
   TrackEstimate e = estimate(report);
   last_pose_ = e.pose;
   return e;
@@ -462,11 +465,35 @@ std::vector<body::BodyPose> Tracker::wholeMapPoses(std::vector<int>* frames) con
   return poses;
 }
 
+void Tracker::fitParticleCount(bool resampled) {
+  // A frame costs its evidence and bookkeeping, plus N particle steps, plus Δs·N more on the
+  // frames that resample (the re-propagation): N = (budget − other) / (step · (1 + Δs · rate)).
+  if (timing_.particle_steps <= 0) return;
+  const double step_ms = timing_.particles_ms / timing_.particle_steps;
+  const double other_ms = std::max(0.0, timing_.total_ms - timing_.particles_ms);
+  constexpr double kMix = 0.1;
+  if (!cost_.measured) {
+    cost_ = {step_ms, other_ms, resampled ? 1.0 : 0.0, true, 0};
+  } else {
+    cost_.step_ms += kMix * (step_ms - cost_.step_ms);
+    cost_.other_ms += kMix * (other_ms - cost_.other_ms);
+    cost_.resample_rate += kMix * ((resampled ? 1.0 : 0.0) - cost_.resample_rate);
+  }
+  const double budget_ms = options_.frame_budget_fraction * 1000.0 * dt_s_;
+  const double per_particle_ms = cost_.step_ms * (1.0 + lagFrames() * cost_.resample_rate);
+  const double affordable = (budget_ms - cost_.other_ms) / per_particle_ms;
+  const double count = std::clamp(affordable, static_cast<double>(options_.min_particles),
+                                  static_cast<double>(options_.filter.num_particles));
+  cost_.count = static_cast<int>(count);
+  filter_->setParticleCount(cost_.count);
+}
+
 TrackEstimate Tracker::estimate(const FilterStepReport& report) const {
   TrackEstimate e;
   e.frame = frame_;
   e.stamp_s = stamp_s_;
   e.effective_sample_size = report.effective_sample_size;
+  e.num_particles = filter_->particleCount();
   e.resampled = report.resampled;
   const auto& particles = filter_->states();
   const auto& log_weights = filter_->logWeights();

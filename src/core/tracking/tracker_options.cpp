@@ -1,5 +1,6 @@
 #include "kneed_walker/core/tracking/tracker_options.h"
 
+#include <cmath>
 #include <sstream>
 
 namespace kneed_walker::core::tracking {
@@ -65,6 +66,11 @@ std::vector<std::string> validate(const TrackerOptions& o) {
             << " candidates at a track's first frame, above " << kMaxInitialCandidates << ": lower either";
     problems.push_back(message.str());
   }
+  if (!(std::isfinite(o.frame_budget_fraction) && o.frame_budget_fraction >= 0 && o.frame_budget_fraction <= 1))
+    problems.push_back("frame_budget_fraction = " + std::to_string(o.frame_budget_fraction) + " is outside [0, 1]");
+  if (o.frame_budget_fraction > 0 && !(o.min_particles >= 1 && o.min_particles <= f.num_particles))
+    problems.push_back("min_particles = " + std::to_string(o.min_particles) + " is outside [1, num_particles = " +
+                       std::to_string(f.num_particles) + "]");
   if (o.max_frame_gap_s < o.default_frame_interval_s)
     problems.push_back("max_frame_gap_s = " + std::to_string(o.max_frame_gap_s) +
                        " is below default_frame_interval_s = " + std::to_string(o.default_frame_interval_s));

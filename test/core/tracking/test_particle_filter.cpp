@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -62,7 +63,8 @@ struct FilterRun {
   int resamplings = 0;
   std::vector<double> final_states;
 };
-FilterRun run(const LinearGaussian& model, FilterOptions options) {
+// `count_at(t)`, if given: the particle count the filter is asked for before frame t's step.
+FilterRun run(const LinearGaussian& model, FilterOptions options, const std::function<int(int)>& count_at = {}) {
   ParticleFilter<double> filter(options);
   auto likelihood = [&](double& x, int frame) {
     const double e = model.observations[frame] - x;
@@ -78,7 +80,15 @@ FilterRun run(const LinearGaussian& model, FilterOptions options) {
   const auto exact = model.kalman();
   FilterRun result;
   for (int t = 0; t < static_cast<int>(model.observations.size()); ++t) {
-    if (t > 0) result.resamplings += filter.step(propagate, t).resampled;
+    if (t > 0) {
+      if (count_at) filter.setParticleCount(count_at(t));
+      const bool resampled = filter.step(propagate, t).resampled;
+      result.resamplings += resampled;
+      // The count changes at a resampling, to the one asked for; the MAP sequence's ancestry
+      // runs through sets of different sizes.
+      if (resampled) EXPECT_EQ(filter.particleCount(), filter.targetParticleCount()) << "frame " << t;
+      EXPECT_EQ(filter.mapSequence().size(), static_cast<size_t>(std::min(t, options.resample_lag_frames) + 1));
+    }
     const auto [mean, variance] = weightedMoments(filter);
     const double ess = ParticleFilter<double>::effectiveSampleSize(filter.logWeights());
     const double mean_sd = std::abs(mean - exact[t].first) / std::sqrt(exact[t].second);
@@ -96,7 +106,8 @@ FilterRun run(const LinearGaussian& model, FilterOptions options) {
 // proper, its posterior mean and variance within a few Monte Carlo standard errors (at each
 // frame's N_eff) of the Kalman filter's. Dropping the lagged resampling's importance
 // re-weighting fails this at 14 standard errors.
-FilterRun checkedAgainstKalman(unsigned model_seed, double ess_threshold, int lag) {
+FilterRun checkedAgainstKalman(unsigned model_seed, double ess_threshold, int lag,
+                               const std::function<int(int)>& count_at = {}) {
   const LinearGaussian model(40, model_seed);
   FilterOptions options;
   options.initial_oversampling = 1;  // the N drawn are the first particles
@@ -104,7 +115,7 @@ FilterRun checkedAgainstKalman(unsigned model_seed, double ess_threshold, int la
   options.resample_ess_fraction = ess_threshold / options.num_particles;
   options.resample_lag_frames = lag;
   options.resample_mixing = 0.95;
-  const FilterRun r = run(model, options);
+  const FilterRun r = run(model, options, count_at);
   std::cout << "lag " << lag << ": worst mean error " << r.worst_mean_sd << " SD (" << r.worst_mean_z
             << " standard errors), worst variance error " << r.worst_variance << " (" << r.worst_variance_z
             << " standard errors), " << r.resamplings << " resamplings\n";
@@ -120,6 +131,12 @@ TEST(ParticleFilter, MatchesTheKalmanPosteriorWithPlainResampling) {
   const FilterRun r = checkedAgainstKalman(8, 10000, 0);
   EXPECT_LT(r.worst_mean_sd, 0.08);
   EXPECT_LT(r.worst_variance, 0.12);
+}
+
+// A count that changes at resamplings (as a tracker fits its frame time): 20000 particles, then
+// 12000 and 30000 in turn; the posterior stays the Kalman filter's.
+TEST(ParticleFilter, MatchesTheKalmanPosteriorWhileItsCountChanges) {
+  checkedAgainstKalman(9, 4000, 3, [](int t) { return t < 10 ? 20000 : (t / 5) % 2 ? 12000 : 30000; });
 }
 
 TEST(ParticleFilter, SameSeedSameParticlesOnAnyNumberOfThreads) {

@@ -303,6 +303,39 @@ TEST(Tracker, ATrackIsLostAfterThreeFramesFarBelowItsRecentLikelihood) {
   EXPECT_TRUE(feed(early, {1.0}));
 }
 
+// Within a frame budget the particle count changes at resamplings to what the measured cost
+// allows, within [min_particles, num_particles]: a budget no frame can meet (a millionth of the
+// 0.1 s interval) brings it to min_particles, one of a whole interval (tens of times what 200
+// particles cost) keeps num_particles; without a budget the count never changes.
+TEST(Tracker, AFrameBudgetFitsTheParticleCountBetweenItsBounds) {
+  for (const double fraction : {0.0, 1e-6, 1.0}) {
+    TrackerOptions options;
+    options.frame_budget_fraction = fraction;
+    options.min_particles = 64;
+    const auto tracker = makeTracker(200, 0, 70.0, options);
+    std::vector<TrackEstimate> estimates;
+    track(*tracker, &estimates);
+    const bool resampled = std::any_of(estimates.begin() + 1, estimates.end(), [](const TrackEstimate& e) { return e.resampled; });
+    ASSERT_TRUE(resampled) << "the count changes at a resampling: this walk must have one";
+    EXPECT_EQ(estimates.front().num_particles, 200);
+    for (const TrackEstimate& e : estimates) {
+      EXPECT_TRUE(e.pose.joints[body::kHead].allFinite());
+      EXPECT_GE(e.num_particles, 64);
+      EXPECT_LE(e.num_particles, 200);
+    }
+    EXPECT_EQ(estimates.back().num_particles, fraction == 1e-6 ? 64 : 200) << "budget fraction " << fraction;
+  }
+  TrackerOptions bad;
+  bad.frame_budget_fraction = 0.5;
+  bad.min_particles = 300;
+  try {
+    makeTracker(200, 0, 70.0, bad);
+    FAIL() << "min_particles above num_particles accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("min_particles = 300"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Tracker, SameSeedSameTrackOnOneOrTwoThreads) {
   const auto one = makeTracker(200, 1), two = makeTracker(200, 2);
   std::vector<TrackEstimate> a, b;

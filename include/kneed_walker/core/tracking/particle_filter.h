@@ -21,6 +21,10 @@
 // sequence of a track can be had at its end: one particle's path, which the prior made, where
 // the sequence of each frame's lagged MAP state jumps between particles.
 //
+// The number of particles may change at a resampling (setParticleCount: a tracker that fits its
+// work into a frame's time, as amcl adapts its count): resampling draws the new count from the
+// old set.
+//
 // Deterministic for a seed on any number of threads: particles are processed in fixed chunks of
 // kChunk, each with its own generator seeded from (seed, frame, pass, chunk).
 #pragma once
@@ -157,7 +161,7 @@ class ParticleFilter {
   using Weigh = std::function<double(State& state, int frame)>;
   static constexpr int kChunk = 64;
 
-  explicit ParticleFilter(const FilterOptions& options) : options_(options) {
+  explicit ParticleFilter(const FilterOptions& options) : options_(options), target_count_(options.num_particles) {
     if (options.num_particles < 1) throw std::invalid_argument("num_particles must be >= 1");
     if (!(options.resample_ess_fraction > 0 && options.resample_ess_fraction <= 1))
       throw std::invalid_argument("resample_ess_fraction must lie in (0, 1]");
@@ -177,7 +181,7 @@ class ParticleFilter {
     retired_.clear();
     Set set;
     set.frame = frame;
-    const int n = options_.num_particles;
+    const int n = target_count_;
     const int candidates = n * options_.initial_oversampling;
     set.states.resize(candidates);
     set.log_weights.assign(candidates, 0.0);
@@ -214,7 +218,7 @@ class ParticleFilter {
     set.log_weights.resize(previous.states.size());
     set.ancestors.resize(previous.states.size());
     std::vector<double> likelihoods(previous.states.size());
-    forChunks(frame, 0, [&](int i, common::Random& random) {
+    forChunks(frame, 0, particleCount(), [&](int i, common::Random& random) {
       likelihoods[i] = propagate(set.states[i], frame, random);
       set.log_weights[i] = previous.log_weights[i] + likelihoods[i];
       set.ancestors[i] = i;
@@ -229,7 +233,7 @@ class ParticleFilter {
       sets_.pop_front();
     }
     report.ess_before_resampling = effectiveSampleSize(sets_.back().log_weights);
-    if (report.ess_before_resampling < options_.resample_ess_fraction * options_.num_particles) {
+    if (report.ess_before_resampling < options_.resample_ess_fraction * particleCount()) {
       const auto started = std::chrono::steady_clock::now();
       resample(propagate, report);
       report.resampled = true;
@@ -238,6 +242,12 @@ class ParticleFilter {
     report.effective_sample_size = effectiveSampleSize(sets_.back().log_weights);
     return report;
   }
+
+  // The particles now (the newest frame's), and the count the next resampling draws (at least 1;
+  // FilterOptions::num_particles until set).
+  int particleCount() const { return sets_.empty() ? options_.num_particles : static_cast<int>(sets_.back().states.size()); }
+  void setParticleCount(int count) { target_count_ = std::max(1, count); }
+  int targetParticleCount() const { return target_count_; }
 
   // The particles at the newest frame and their normalised log-weights.
   const std::vector<State>& states() const { return sets_.back().states; }
@@ -297,12 +307,8 @@ class ParticleFilter {
   // 0 and, at frame t, 2t + 1 and 2t + 2).
   static constexpr std::uint64_t kInitialResamplingPass = ~std::uint64_t{0};
 
-  // Calls f(i, random) for every particle (or the first n items: the initial candidates), chunk
-  // by chunk, each chunk with its own generator.
-  template <class F>
-  void forChunks(int frame, std::uint64_t pass, F&& f) {
-    forChunks(frame, pass, options_.num_particles, std::forward<F>(f));
-  }
+  // Calls f(i, random) for items 0..n−1 (particles, or the initial candidates), chunk by chunk,
+  // each chunk with its own generator.
   template <class F>
   void forChunks(int frame, std::uint64_t pass, int n, F&& f) {
     const int chunks = (n + kChunk - 1) / kChunk;
@@ -339,19 +345,20 @@ class ParticleFilter {
   }
 
   void resample(const Propagate& propagate, FilterStepReport& report) {
-    const int n = options_.num_particles;
+    const int count = target_count_;  // after; the buffered sets may differ in size before
     const int base = 0;  // the oldest buffered set: frame t − Δs (or the first frame)
     const int last = static_cast<int>(sets_.size()) - 1;
     report.resampled_from_frame = sets_[base].frame;
     // W: each base particle's share of the weight at t (its descendants').
-    std::vector<double> descendants(n);
-    for (int i = 0; i < n; ++i) descendants[i] = std::exp(sets_[last].log_weights[i]);
+    std::vector<double> descendants(sets_[last].states.size());
+    for (std::size_t i = 0; i < descendants.size(); ++i) descendants[i] = std::exp(sets_[last].log_weights[i]);
     for (int s = last; s > base; --s) {
-      std::vector<double> up(n, 0.0);
-      for (int i = 0; i < n; ++i) up[sets_[s].ancestors[i]] += descendants[i];
+      std::vector<double> up(sets_[s - 1].states.size(), 0.0);
+      for (std::size_t i = 0; i < descendants.size(); ++i) up[sets_[s].ancestors[i]] += descendants[i];
       descendants.swap(up);
     }
     const double gamma = options_.resample_mixing;
+    const int n = static_cast<int>(sets_[base].states.size());
     std::vector<double> proposal(n), base_weights(n);
     for (int j = 0; j < n; ++j) {
       base_weights[j] = std::exp(sets_[base].log_weights[j]);
@@ -363,42 +370,45 @@ class ParticleFilter {
     const std::uint64_t now = static_cast<std::uint64_t>(sets_[last].frame);
     common::Random random(mixSeed(options_.seed, now, 2 * now + 2, 0));
     const std::vector<int> picked =
-        systematic(proposal, n, std::uniform_real_distribution<double>(0.0, 1.0)(random));
+        systematic(proposal, count, std::uniform_real_distribution<double>(0.0, 1.0)(random));
 
     // The resampled particles at the base frame, re-weighted, then propagated again to t.
-    std::vector<State> states(n);
-    std::vector<double> log_weights(n);
-    for (int k = 0; k < n; ++k) {
+    std::vector<State> states(count);
+    std::vector<double> log_weights(count);
+    for (int k = 0; k < count; ++k) {
       states[k] = sets_[base].states[picked[k]];
       log_weights[k] = base == last ? 0.0
                                     : std::log(base_weights[picked[k]]) - std::log(proposal[picked[k]]);
     }
     if (base == last) {  // no lag buffered: plain resampling at t, equal weights
       Set& set = sets_[last];
-      std::vector<int> ancestors(n);
-      for (int k = 0; k < n; ++k) ancestors[k] = set.ancestors[picked[k]];
+      std::vector<int> ancestors(count);
+      for (int k = 0; k < count; ++k) ancestors[k] = set.ancestors[picked[k]];
       set.states = std::move(states);
       set.ancestors = std::move(ancestors);
-      set.log_weights.assign(n, -std::log(double(n)));
+      set.log_weights.assign(count, -std::log(double(count)));
       return;
     }
     for (int s = base + 1; s <= last; ++s) {
       Set& set = sets_[s];
-      forChunks(set.frame, 2 * now + 1, [&](int i, common::Random& r) {
+      forChunks(set.frame, 2 * now + 1, count, [&](int i, common::Random& r) {
         log_weights[i] += propagate(states[i], set.frame, r);
       });
       std::vector<double> normalised = log_weights;
       normalise(normalised);
       set.states = states;
       set.log_weights = std::move(normalised);
-      if (s == base + 1)
+      if (s == base + 1) {
         set.ancestors = picked;
-      else
+      } else {
+        set.ancestors.resize(count);
         std::iota(set.ancestors.begin(), set.ancestors.end(), 0);
+      }
     }
   }
 
   FilterOptions options_;
+  int target_count_;      // the particles the next resampling draws
   std::deque<Set> sets_;  // the last Δs + 1 frames, oldest first
   AncestryTree<State> retired_;  // with keep_paths: the lineages of the frames before the buffer
 };

@@ -95,6 +95,7 @@ struct TrackEstimate {
   dynamics::SpringParameters springs;
   double toe_off_impulse_ns = 0;
   double effective_sample_size = 0;
+  int num_particles = 0;  // the particles now (TrackerOptions::frame_budget_fraction may change it)
   bool resampled = false;
   double map_log_likelihood = 0;
   bool lost = false;               // the likelihood says the body is no longer where the particles are
@@ -219,6 +220,8 @@ class Tracker {
   // Propagates one particle into `frame` and weighs it, adding the times to the counters.
   double propagate(TrackerParticle& particle, int frame, common::Random& random);
   TrackEstimate estimate(const FilterStepReport& report) const;
+  // With a frame budget: the count the next resampling draws, from this frame's measured costs.
+  void fitParticleCount(bool resampled);
   cv::Rect regionOfInterest() const;
   void learnAppearance(const cv::Mat& bgr, const InitialGuess& guess);
   // The body standing in mid-stance at the guess, projected.
@@ -245,6 +248,13 @@ class Tracker {
   int frame_ = 0;
   double stamp_s_ = 0, dt_s_ = 0;
   TrackLossDetector loss_;
+  // Running means (exponential, over about 10 frames) of a particle step's wall time, the
+  // frame's other work, and how often frames resample: what fitParticleCount plans with.
+  struct FrameCost {
+    double step_ms = 0, other_ms = 0, resample_rate = 0;
+    bool measured = false;
+    int count = 0;  // the count they allow: the next resampling's, and a restarted track's
+  } cost_;
   body::BodyPose last_pose_;
   TrackerTiming timing_;
 };

@@ -56,6 +56,15 @@ struct TrackerOptions {
   // starts again from where it was.
   double lost_likelihood_fraction = 0.0;
 
+  // Online (the nodelet): each frame's work fits into this fraction of the frame interval (from
+  // the stamps): at every resampling the particle count becomes what the measured cost per
+  // particle (resampling's re-propagation included, on average) allows, within
+  // [min_particles, filter.num_particles], as amcl adapts its count. 0: always num_particles,
+  // whatever the time (the offline tools: the same input and seed give the same output). Not
+  // in trackerOptionTable(): the nodelet's own parameters set them.
+  double frame_budget_fraction = 0.0;
+  int min_particles = 500;
+
   // Frames whose stamp gap is not usable (first frame, equal or backwards stamps) are
   // advanced by this interval; gaps above max_frame_gap_s reinitialise the tracker.
   double default_frame_interval_s = 0.1;
