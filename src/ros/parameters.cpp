@@ -125,8 +125,8 @@ const core::common::OptionTable<RosInterfaceOptions>& rosInterfaceOptionTable() 
   using core::common::OptionField;
   using O = RosInterfaceOptions;
   static const core::common::OptionTable<RosInterfaceOptions> table{
-      {"image_queue_size", [](O& o) -> OptionField { return &o.image_queue_size; }, 1, 100, "frames",
-       "frames that wait while one is tracked; a frame arriving at a full queue pushes out the oldest (dropped)"},
+      {"image_queue_size", [](O& o) -> OptionField { return &o.image_queue_size; }, 1, 1000, "frames",
+       "frames that wait while one is tracked (150: 5 s at 30 fps, through a track's first-frame search; 140 MB of VGA images); a frame arriving at a full queue pushes out the oldest (dropped)"},
       {"frame_budget_fraction", [](O& o) -> OptionField { return &o.frame_budget_fraction; }, 0, 1, "",
        "each frame's tracking fits into this fraction of the frame interval (from the stamps): the particle count adapts at resamplings within [min_particles, num_particles]; 0: always num_particles"},
       {"min_particles", [](O& o) -> OptionField { return &o.min_particles; }, 1, 1e6, "",

@@ -24,11 +24,11 @@
 //          frames with the suffix _smoothed (body_<id>_smoothed, l_knee_<id>_smoothed, ...).
 //
 // Threads: the subscriber callback only queues the frame for a worker thread and returns. Up
-// to ~image_queue_size frames wait; a frame arriving at a full queue pushes out the oldest,
-// which is dropped and counted (1, the default, keeps the newest only: least latency; more
-// lets a bag played near the tracker's rate through its bursts, such as the held frames
-// answered after the background is learned). The worker runs the tracker (its per-particle
-// work on all cores).
+// to ~image_queue_size frames wait (150: 5 s at 30 fps, through a track's first-frame search);
+// a frame arriving at a full queue pushes out the oldest, which is dropped and counted. The
+// worker runs the tracker (its per-particle work on all cores), telling it how many frames wait:
+// with ~frame_budget_fraction its particle count is fitted to catch them up within about a
+// second (Tracker::setBacklogFrames).
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -449,6 +449,10 @@ void TrackerNodelet::process(const Frame& frame) {
     } catch (const std::invalid_argument& e) {
       NODELET_ERROR("~init_box (%g, %g) %gx%g px cannot be used: %s", box->x, box->y, box->width, box->height, e.what());
     }
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    session_->setBacklogFrames(static_cast<int>(waiting_.size()));
   }
   std::vector<kw::tracking::SessionAnswer> answers;
   try {

@@ -23,7 +23,7 @@ namespace kneed_walker::ros_glue {
 struct RosInterfaceOptions {
   std::string world_frame = "world";  // frame of the published poses (REP 105 style)
   std::string image_transport = "raw";  // raw or compressed (image_transport plugins)
-  int image_queue_size = 1;           // frames waiting while one is tracked; a full queue drops its oldest (counted)
+  int image_queue_size = 150;         // frames waiting while one is tracked; a full queue drops its oldest (counted)
   // Each frame's tracking fits into this fraction of the frame interval (from the stamps): the
   // particle count adapts within [min_particles, num_particles] (TrackerOptions, which gets them).
   double frame_budget_fraction = 0.8;

@@ -106,6 +106,7 @@ Tracker& TrackingSession::slotTracker(int slot, std::optional<double> person_hei
   const double wanted = person_height_m.value_or(default_height_m_);
   if (!slots_[slot].tracker || std::abs(slots_[slot].tracker->personHeightM() - wanted) > 1e-9) {
     slots_[slot].tracker = make_tracker_(slot + 1, person_height_m);
+    slots_[slot].tracker->setBacklogFrames(backlog_frames_);
     if (!background_.empty()) slots_[slot].tracker->setBackground(background_);
   }
   return *slots_[slot].tracker;
@@ -125,6 +126,12 @@ void TrackingSession::setBackground(vision::BackgroundModel background) {
 }
 
 void TrackingSession::startFrom(const InitialGuess& guess) { pending_guess_ = guess; }
+
+void TrackingSession::setBacklogFrames(int frames) {
+  backlog_frames_ = frames;
+  for (Slot& slot : slots_)
+    if (slot.tracker) slot.tracker->setBacklogFrames(frames);
+}
 
 void TrackingSession::startFromBox(const cv::Rect2d& box_px) {
   pending_guess_ = guessFromBox(tracker().camera(), tracker().ground(), box_px);

@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -181,6 +182,12 @@ class Tracker {
   void project(const body::BodyPose& pose, vision::BodyOutlines& outlines) const;
   // The bounding box of a pose's visible projected parts, px (empty when none is in view).
   cv::Rect2d imageBox(const body::BodyPose& pose) const;
+  // Frames waiting behind the next one (online: the nodelet's queue). With a frame budget
+  // (TrackerOptions::frame_budget_fraction) the count is fitted so that they are caught up
+  // within about kCatchUpS of input: each frame's budget is the interval times n / (n + backlog),
+  // n the frames of kCatchUpS.
+  static constexpr double kCatchUpS = 1.0;
+  void setBacklogFrames(int frames) { backlog_frames_ = std::max(0, frames); }
   // The MAP pose of the last frame started or tracked.
   const body::BodyPose& lastPose() const { return last_pose_; }
   // The person's body parts (for the person's height).
@@ -248,6 +255,7 @@ class Tracker {
   int frame_ = 0;
   double stamp_s_ = 0, dt_s_ = 0;
   TrackLossDetector loss_;
+  int backlog_frames_ = 0;
   // Running means (exponential, over about 10 frames) of a particle step's wall time, the
   // frame's other work, and how often frames resample: what fitParticleCount plans with.
   struct FrameCost {

@@ -147,6 +147,8 @@ class TrackingSession {
   const Tracker& tracker(int body = 1) const;
   int framesFed() const { return next_input_; }
   int trackCount() const;  // tracks running now
+  // Frames waiting behind the next one fed, for the trackers' frame budgets (Tracker::setBacklogFrames).
+  void setBacklogFrames(int frames);
   // Wall time of the last fed frame's tracking, all tracks and the search for people, ms.
   double lastFrameMs() const { return last_frame_ms_; }
 
@@ -190,6 +192,7 @@ class TrackingSession {
   std::deque<std::vector<Sighting>> sightings_;   // the people found in the last frames
   std::optional<Eigen::Vector2d> last_seen_m_;    // where the last lost track last was
   int next_input_ = 0;
+  int backlog_frames_ = 0;
   double last_frame_ms_ = 0;
 };
 
