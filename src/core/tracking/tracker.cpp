@@ -480,8 +480,8 @@ void Tracker::fitParticleCount(bool resampled) {
     cost_.resample_rate += kMix * ((resampled ? 1.0 : 0.0) - cost_.resample_rate);
   }
   const double catch_up_frames = std::max(1.0, kCatchUpS / dt_s_);
-  const double budget_ms =
-      options_.frame_budget_fraction * 1000.0 * dt_s_ * catch_up_frames / (catch_up_frames + backlog_frames_);
+  const double budget_ms = budget_share_ * options_.frame_budget_fraction * 1000.0 * dt_s_ * catch_up_frames /
+                           (catch_up_frames + backlog_frames_);
   const double per_particle_ms = cost_.step_ms * (1.0 + lagFrames() * cost_.resample_rate);
   const double affordable = (budget_ms - cost_.other_ms) / per_particle_ms;
   const double count = std::clamp(affordable, static_cast<double>(options_.min_particles),

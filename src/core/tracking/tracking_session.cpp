@@ -219,7 +219,11 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
       }
     }
   }
-  // The running tracks: this frame's step; a lost track ends.
+  // The running tracks: this frame's step, each in its share of the frame's budget; a lost
+  // track ends.
+  const int running = trackCount();
+  for (Slot& slot : slots_)
+    if (slot.tracker) slot.tracker->setBudgetShare(1.0 / std::max(1, running));
   for (int s = 0; s < slots; ++s) {
     Slot& slot = slots_[s];
     if (!slot.running() || s == given) continue;

@@ -307,14 +307,24 @@ TEST(Tracker, ATrackIsLostAfterThreeFramesFarBelowItsRecentLikelihood) {
 // allows, within [min_particles, num_particles]: a budget no frame can meet (a millionth of the
 // 0.1 s interval) brings it to min_particles, one of a whole interval (tens of times what 200
 // particles cost) keeps num_particles, unless a million frames wait behind each (their catch-up
-// leaves each frame a millionth of it); without a budget the count never changes.
+// leaves each frame a millionth of it) or the tracker has a millionth of the budget (a session's
+// share among people); without a budget the count never changes.
 TEST(Tracker, AFrameBudgetFitsTheParticleCountBetweenItsBounds) {
-  for (const auto& [fraction, backlog] : {std::pair{0.0, 1000000}, {1e-6, 0}, {1.0, 0}, {1.0, 1000000}}) {
+  struct Case {
+    double fraction;
+    int backlog;
+    double share;
+  };
+  for (const Case& c : {Case{0.0, 1000000, 1e-6}, Case{1e-6, 0, 1.0}, Case{1.0, 0, 1.0}, Case{1.0, 1000000, 1.0},
+                        Case{1.0, 0, 1e-6}}) {
+    const double fraction = c.fraction;
+    const int backlog = c.backlog;
     TrackerOptions options;
     options.frame_budget_fraction = fraction;
     options.min_particles = 64;
     const auto tracker = makeTracker(200, 0, 70.0, options);
     tracker->setBacklogFrames(backlog);
+    tracker->setBudgetShare(c.share);
     std::vector<TrackEstimate> estimates;
     track(*tracker, &estimates);
     const bool resampled = std::any_of(estimates.begin() + 1, estimates.end(), [](const TrackEstimate& e) { return e.resampled; });
@@ -325,7 +335,7 @@ TEST(Tracker, AFrameBudgetFitsTheParticleCountBetweenItsBounds) {
       EXPECT_GE(e.num_particles, 64);
       EXPECT_LE(e.num_particles, 200);
     }
-    const bool unmeetable = fraction > 0 && (fraction < 1e-3 || backlog > 0);
+    const bool unmeetable = fraction > 0 && (fraction < 1e-3 || backlog > 0 || c.share < 1e-3);
     EXPECT_EQ(estimates.back().num_particles, unmeetable ? 64 : 200) << "budget fraction " << fraction << ", backlog " << backlog;
   }
   TrackerOptions bad;

@@ -188,6 +188,9 @@ class Tracker {
   // n the frames of kCatchUpS.
   static constexpr double kCatchUpS = 1.0;
   void setBacklogFrames(int frames) { backlog_frames_ = std::max(0, frames); }
+  // The share of each frame's budget this tracker has, (0, 1]: a session tracking n people
+  // gives each 1/n.
+  void setBudgetShare(double share) { budget_share_ = std::clamp(share, 1e-6, 1.0); }
   // The MAP pose of the last frame started or tracked.
   const body::BodyPose& lastPose() const { return last_pose_; }
   // The person's body parts (for the person's height).
@@ -256,6 +259,7 @@ class Tracker {
   double stamp_s_ = 0, dt_s_ = 0;
   TrackLossDetector loss_;
   int backlog_frames_ = 0;
+  double budget_share_ = 1.0;
   // Running means (exponential, over about 10 frames) of a particle step's wall time, the
   // frame's other work, and how often frames resample: what fitParticleCount plans with.
   struct FrameCost {
