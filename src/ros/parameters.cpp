@@ -130,7 +130,7 @@ const core::common::OptionTable<RosInterfaceOptions>& rosInterfaceOptionTable() 
       {"frame_budget_fraction", [](O& o) -> OptionField { return &o.frame_budget_fraction; }, 0, 1, "",
        "each frame's tracking fits into this fraction of the frame interval (from the stamps): the particle count adapts at resamplings within [min_particles, num_particles]; 0: always num_particles"},
       {"min_particles", [](O& o) -> OptionField { return &o.min_particles; }, 1, 1e6, "",
-       "the fewest particles per person a frame budget may bring the count to, at most num_particles"},
+       "the fewest particles per person a frame budget may bring the count to (a smaller num_particles is the count)"},
       {"publish_particle_cloud", [](O& o) -> OptionField { return &o.publish_particle_cloud; }, 0, 0, "",
        "publish ~particle_cloud"},
       {"particle_cloud_interval_s", [](O& o) -> OptionField { return &o.particle_cloud_interval_s; }, 0, 3600, "s",
@@ -184,7 +184,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   RosInterfaceOptions& r = config.ros;
   readTable(reader, rosInterfaceOptionTable(), r);
   config.tracker.frame_budget_fraction = r.frame_budget_fraction;
-  config.tracker.min_particles = r.min_particles;
+  // A num_particles below min_particles is the count: the budget has nothing to fit.
+  config.tracker.min_particles = std::min(r.min_particles, config.tracker.filter.num_particles);
   reader.read("world_frame", r.world_frame);
   reader.read("image_transport", r.image_transport);
   reader.read("camera_file", r.camera_file);

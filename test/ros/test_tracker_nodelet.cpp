@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -312,6 +313,26 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
     EXPECT_NE(what.find("/bad_parameters/num_partcles is not a parameter"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/image_transport = 'carrier_pigeon'"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/ground_slope_rad = 0.100000 with camera_file"), std::string::npos) << what;
+  }
+}
+
+// The frame budget's parameters reach the tracker's options; num_particles below the default
+// min_particles is taken as the count (nothing to fit), and a bad fraction is refused by name.
+TEST(TrackerNodelet, FrameBudgetParametersReachTheTracker) {
+  ros::NodeHandle few("/few_particles");
+  few.setParam("num_particles", 300);
+  const TrackerNodeConfig config = loadTrackerNodeConfig(few);
+  EXPECT_EQ(config.tracker.filter.num_particles, 300);
+  EXPECT_EQ(config.tracker.min_particles, 300);
+  EXPECT_DOUBLE_EQ(config.tracker.frame_budget_fraction, 0.8);
+  EXPECT_EQ(config.ros.image_queue_size, 150);
+  ros::NodeHandle bad("/bad_budget");
+  bad.setParam("frame_budget_fraction", std::numeric_limits<double>::quiet_NaN());
+  try {
+    loadTrackerNodeConfig(bad);
+    FAIL() << "a NaN frame_budget_fraction was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/bad_budget/frame_budget_fraction"), std::string::npos) << e.what();
   }
 }
 
