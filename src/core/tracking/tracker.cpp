@@ -468,7 +468,7 @@ std::vector<body::BodyPose> Tracker::wholeMapPoses(std::vector<int>* frames) con
 void Tracker::fitParticleCount(bool resampled) {
   // A frame costs its evidence and bookkeeping, plus N particle steps, plus Δs·N more on the
   // frames that resample (the re-propagation): N = (budget − other) / (step · (1 + Δs · rate)).
-  if (timing_.particle_steps <= 0) return;
+  if (timing_.particle_steps <= 0 || !(dt_s_ > 0)) return;
   const double step_ms = timing_.particles_ms / timing_.particle_steps;
   const double other_ms = std::max(0.0, timing_.total_ms - timing_.particles_ms);
   constexpr double kMix = 0.1;
@@ -483,6 +483,7 @@ void Tracker::fitParticleCount(bool resampled) {
   const double budget_ms = budget_share_ * options_.frame_budget_fraction * 1000.0 * dt_s_ * catch_up_frames /
                            (catch_up_frames + backlog_frames_);
   const double per_particle_ms = cost_.step_ms * (1.0 + lagFrames() * cost_.resample_rate);
+  if (!(per_particle_ms > 0)) return;  // too quick to time: keep the count
   const double affordable = (budget_ms - cost_.other_ms) / per_particle_ms;
   const double count = std::clamp(affordable, static_cast<double>(options_.min_particles),
                                   static_cast<double>(options_.filter.num_particles));
