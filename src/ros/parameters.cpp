@@ -185,7 +185,7 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   readTable(reader, rosInterfaceOptionTable(), r);
   config.tracker.frame_budget_fraction = r.frame_budget_fraction;
   // A num_particles below min_particles is the count: the budget has nothing to fit.
-  config.tracker.min_particles = std::min(r.min_particles, config.tracker.filter.num_particles);
+  config.tracker.min_particles = std::min(r.min_particles, std::max(1, config.tracker.filter.num_particles));
   reader.read("world_frame", r.world_frame);
   reader.read("image_transport", r.image_transport);
   reader.read("camera_file", r.camera_file);

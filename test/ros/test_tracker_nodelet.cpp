@@ -309,6 +309,7 @@ TEST(TrackerNodelet, ParameterProblemsAreAllNamed) {
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("/bad_parameters/num_particles = -5 is outside"), std::string::npos) << what;
+    EXPECT_EQ(what.find("min_particles ="), std::string::npos) << "only the parameter typed is named: " << what;
     EXPECT_NE(what.find("/bad_parameters/person_mass_kg must be a number"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/num_partcles is not a parameter"), std::string::npos) << what;
     EXPECT_NE(what.find("/bad_parameters/image_transport = 'carrier_pigeon'"), std::string::npos) << what;

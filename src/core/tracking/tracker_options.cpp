@@ -68,7 +68,8 @@ std::vector<std::string> validate(const TrackerOptions& o) {
   }
   if (!(std::isfinite(o.frame_budget_fraction) && o.frame_budget_fraction >= 0 && o.frame_budget_fraction <= 1))
     problems.push_back("frame_budget_fraction = " + std::to_string(o.frame_budget_fraction) + " is outside [0, 1]");
-  if (o.frame_budget_fraction > 0 && !(o.min_particles >= 1 && o.min_particles <= f.num_particles))
+  // (A num_particles below 1 is named by the table's range already.)
+  if (o.frame_budget_fraction > 0 && f.num_particles >= 1 && !(o.min_particles >= 1 && o.min_particles <= f.num_particles))
     problems.push_back("min_particles = " + std::to_string(o.min_particles) + " is outside [1, num_particles = " +
                        std::to_string(f.num_particles) + "]");
   if (o.max_frame_gap_s < o.default_frame_interval_s)
