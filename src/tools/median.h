@@ -1,4 +1,4 @@
-// The median of timings, for the benchmark tools (they report medians: shared machines are noisy).
+// The median and percentiles of timings, for the benchmark tools (they report medians: shared machines are noisy).
 #pragma once
 
 #include <algorithm>
@@ -6,12 +6,18 @@
 
 namespace kneed_walker::tools {
 
-// The median; 0 for no values.
-inline double median(std::vector<double> v) {
+// The p-th percentile (0 ≤ p ≤ 100), interpolated linearly between the nearest ranks; 0 for no
+// values.
+inline double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * (v.size() - 1);
+  const size_t below = static_cast<size_t>(rank);
+  const size_t above = std::min(below + 1, v.size() - 1);
+  return v[below] + (rank - below) * (v[above] - v[below]);
 }
+
+// The median (the mean of the middle two of an even count); 0 for no values.
+inline double median(const std::vector<double>& v) { return percentile(v, 50); }
 
 }  // namespace kneed_walker::tools
