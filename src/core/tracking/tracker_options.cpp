@@ -56,7 +56,7 @@ const common::OptionTable<TrackerOptions>& trackerOptionTable() {
 
 std::vector<std::string> validate(const TrackerOptions& o) {
   std::vector<std::string> problems = common::rangeProblems(o, trackerOptionTable());
-  // The candidates are held at once: their number is bounded too.
+  // Each candidate is weighed and its weight held (16 bytes): their number is bounded too.
   const FilterOptions& f = o.filter;
   if (f.num_particles >= 1 && f.initial_oversampling >= 1 &&
       static_cast<long long>(f.num_particles) * f.initial_oversampling > kMaxInitialCandidates) {

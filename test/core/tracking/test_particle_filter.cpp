@@ -5,8 +5,10 @@
 #include <iostream>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -282,6 +284,48 @@ TEST(ParticleFilter, InitialOversamplingSamplesASharpFirstPosteriorFromABroadGue
   EXPECT_NEAR(variance / posterior_variance, 1.0, 0.5);
   // Deterministic for the seed on any number of threads.
   EXPECT_EQ(initialized(500, 2).second, states);
+}
+
+// A state that counts how many of its kind exist at once.
+struct CountedState {
+  static inline std::atomic<int> alive{0}, peak{0};
+  double x = 0;
+  double weighed = std::numeric_limits<double>::quiet_NaN();  // what weigh() cached in it
+  CountedState() { arrive(); }
+  CountedState(const CountedState& other) : x(other.x), weighed(other.weighed) { arrive(); }
+  CountedState& operator=(const CountedState&) = default;
+  ~CountedState() { --alive; }
+  static void arrive() {
+    const int now = ++alive;
+    int before = peak.load();
+    while (now > before && !peak.compare_exchange_weak(before, now)) {
+    }
+  }
+};
+
+// The first frame's k·N candidates are weighed without being held at once (the tracker's are
+// 5000 × 32 of 1 kB each): at most the N kept and a few in each thread's hands exist together,
+// and each kept one carries what weigh() cached in it.
+TEST(ParticleFilter, InitialOversamplingHoldsOnlyTheKeptCandidates) {
+  FilterOptions options;
+  options.num_particles = 100;
+  options.initial_oversampling = 200;
+  options.num_threads = 2;
+  auto weight = [](double x) { return -0.5 * (x - 1.0) * (x - 1.0) / 0.01; };
+  ParticleFilter<CountedState> filter(options);
+  CountedState::alive = 0;
+  CountedState::peak = 0;
+  filter.initialize(
+      [](common::Random& random) {
+        CountedState s;
+        s.x = std::normal_distribution<double>(0, 1)(random);
+        return s;
+      },
+      [&](CountedState& s, int) { return s.weighed = weight(s.x); }, 0);
+  std::cout << "candidates held at once, at most: " << CountedState::peak << " (kept: 100, drawn: 20000)\n";
+  EXPECT_LE(CountedState::peak, 100 + 10);
+  ASSERT_EQ(filter.states().size(), 100u);
+  for (const CountedState& s : filter.states()) EXPECT_DOUBLE_EQ(s.weighed, weight(s.x));
 }
 
 TEST(ParticleFilter, LogSumExpIsStable) {

@@ -61,7 +61,7 @@ struct FilterOptions {
   // samples at k times one frame's cost, once. 1: the N drawn are the particles. A tracker's
   // initial guess is coarse (position ± 0.25 m, heading, phase and gait unknown): N particles
   // drawn from it put none near the person, and the filter locks onto a nearby wrong walk that
-  // it cannot leave; k·N ≤ kMaxInitialCandidates (they are held at once).
+  // it cannot leave; k·N ≤ kMaxInitialCandidates (each is weighed, and its weight held).
   int initial_oversampling = 32;       // k ≥ 1
 };
 // The most candidates a first frame may draw (FilterOptions::initial_oversampling).
@@ -175,6 +175,10 @@ class ParticleFilter {
 
   // Draws the particles of the first frame from `sample` and weighs them by that frame (with
   // initial_oversampling k > 1: draws and weighs k·N, keeps N by systematic resampling).
+  // The k·N candidates are not held at once (160 MB for the tracker's 5000 × 32): a first pass
+  // keeps their weights only, and the kept ones are then drawn again, by replaying their chunks'
+  // generators, and weighed again. So `sample` must draw only from the generator it is given,
+  // and `weigh` must give a state the same weight and cached values whenever it is called.
   FilterStepReport initialize(const std::function<State(common::Random&)>& sample,
                               const Weigh& weigh, int frame) {
     sets_.clear();
@@ -183,24 +187,48 @@ class ParticleFilter {
     set.frame = frame;
     const int n = target_count_;
     const int candidates = n * options_.initial_oversampling;
-    set.states.resize(candidates);
-    set.log_weights.assign(candidates, 0.0);
     set.ancestors.assign(n, -1);
-    forChunks(frame, 0, candidates, [&](int i, common::Random& random) {
-      set.states[i] = sample(random);
-      set.log_weights[i] = weigh(set.states[i], frame);
-    });
     FilterStepReport report;
-    report.max_log_likelihood = *std::max_element(set.log_weights.begin(), set.log_weights.end());
-    normalise(set.log_weights);
-    if (candidates > n) {
+    if (candidates == n) {
+      set.states.resize(n);
+      set.log_weights.assign(n, 0.0);
+      forChunks(frame, 0, n, [&](int i, common::Random& random) {
+        set.states[i] = sample(random);
+        set.log_weights[i] = weigh(set.states[i], frame);
+      });
+      report.max_log_likelihood = *std::max_element(set.log_weights.begin(), set.log_weights.end());
+      normalise(set.log_weights);
+    } else {
+      std::vector<double> log_weights(candidates);
+      forChunks(frame, 0, candidates, [&](int i, common::Random& random) {
+        State candidate = sample(random);
+        log_weights[i] = weigh(candidate, frame);
+      });
+      report.max_log_likelihood = *std::max_element(log_weights.begin(), log_weights.end());
+      normalise(log_weights);
       std::vector<double> probabilities(candidates);
-      for (int i = 0; i < candidates; ++i) probabilities[i] = std::exp(set.log_weights[i]);
+      for (int i = 0; i < candidates; ++i) probabilities[i] = std::exp(log_weights[i]);
       common::Random random(mixSeed(options_.seed, static_cast<std::uint64_t>(frame), kInitialResamplingPass, 0));
       const std::vector<int> kept = systematic(probabilities, n, std::uniform_real_distribution<double>(0.0, 1.0)(random));
-      std::vector<State> states(n);
-      for (int i = 0; i < n; ++i) states[i] = std::move(set.states[kept[i]]);
-      set.states = std::move(states);
+      // The kept candidates (in increasing order) chunk by chunk: each chunk's generator is
+      // replayed up to its last kept candidate.
+      std::vector<int> chunk_starts;  // positions in `kept` where another chunk's candidates begin
+      for (int j = 0; j < n; ++j)
+        if (j == 0 || kept[j] / kChunk != kept[j - 1] / kChunk) chunk_starts.push_back(j);
+      chunk_starts.push_back(n);
+      set.states.resize(n);
+      common::parallelFor(static_cast<int>(chunk_starts.size()) - 1, options_.num_threads, [&](int begin, int end) {
+        for (int c = begin; c < end; ++c) {
+          const int chunk = kept[chunk_starts[c]] / kChunk;
+          common::Random replay(mixSeed(options_.seed, static_cast<std::uint64_t>(frame), 0, static_cast<std::uint64_t>(chunk)));
+          for (int i = chunk * kChunk, j = chunk_starts[c]; j < chunk_starts[c + 1]; ++i) {
+            State candidate = sample(replay);
+            if (i != kept[j]) continue;
+            weigh(candidate, frame);
+            for (; j < chunk_starts[c + 1] && kept[j] == i; ++j) set.states[j] = candidate;
+          }
+        }
+      }, 1);
       set.log_weights.assign(n, -std::log(static_cast<double>(n)));
     }
     sets_.push_back(std::move(set));
