@@ -134,6 +134,23 @@ TEST(Likelihood, TheFlowTermAlonePrefersTheTrueMotion) {
   EXPECT_GT(true_motion, backwards);
 }
 
+// Particles at an image edge, or off it, leave a region a few pixels across: the frame has no
+// flow term there (DIS refuses images under 12 px), and the likelihood is still evaluated.
+TEST(Likelihood, ARegionTooSmallForFlowHasNoFlowTerm) {
+  const Scene& s = scene();
+  cv::Mat previous_grey;
+  cv::cvtColor(s.previous, previous_grey, cv::COLOR_BGR2GRAY);
+  const body::BodyPose& truth = s.walk.frames[s.frame].pose;
+  for (const cv::Rect& roi : {cv::Rect(760, 300, 8, 100), cv::Rect(0, 570, 300, 6), cv::Rect(900, 900, 10, 10)}) {
+    FrameEvidence e;
+    ASSERT_NO_THROW(e.compute(s.current, previous_grey, roi, s.background, s.appearance, s.options)) << roi;
+    EXPECT_FALSE(e.hasFlow()) << roi;
+    EXPECT_TRUE(std::isfinite(s.score(e, truth, s.walk.frames[s.frame - 1].pose, s.options))) << roi;
+  }
+  const FrameEvidence whole = s.evidence(s.options);
+  EXPECT_TRUE(whole.hasFlow());
+}
+
 TEST(Likelihood, HiddenPartsAndOutsidePixelsAreCounted) {
   const Scene& s = scene();
   const FrameEvidence e = s.evidence(s.options);

@@ -32,7 +32,10 @@ struct FlowPoint {
 
 class FlowField {
  public:
-  // Flow inside `roi` of the current frame (8-bit grey images of one size).
+  // Flow inside `roi` of the current frame (8-bit grey images of one size). A region narrower
+  // or lower than kMinSidePx (the particles near an image edge, or off it) has no flow: DIS
+  // refuses images under 12 px, and its 8 px patches need two to a side.
+  static constexpr int kMinSidePx = 16;
   void compute(const cv::Mat& previous_grey, const cv::Mat& grey, const cv::Rect& roi,
                const FlowOptions& options);
   bool empty() const { return points_.empty(); }
