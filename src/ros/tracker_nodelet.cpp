@@ -18,8 +18,8 @@
 //          latched), ~particle_cloud (geometry_msgs/PoseArray, every person's, throttled),
 //          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
 //          ~body_poses_smoothed (kneed_walker/BodyPoseArray): the MAP poses of frame t − Δs
-//          (paper §4's fixed-lag smoother: the best particle's ancestry, resample_lag_frames
-//          behind) as each becomes final, and a track's last Δs frames when it ends; stamped with
+//          (paper §4's fixed-lag smoother: the best particle's ancestry, kept to one lineage
+//          while it weighs nearly as much, resample_lag_frames behind) as each becomes final, and a track's last Δs frames when it ends; stamped with
 //          the frame each describes (track_offline --lagged writes the same poses), and as /tf
 //          frames with the suffix _smoothed (body_<id>_smoothed, l_knee_<id>_smoothed, ...).
 //

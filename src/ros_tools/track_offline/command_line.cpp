@@ -75,8 +75,8 @@ void addOutputOptions(CLI::App& app, OutputOptions& output, bool& filtered, bool
                                      "state sequence (one particle's path, written when the track ends)");
   app.add_flag("--lagged", lagged,
                "write each frame's MAP state Δs frames later, as the nodelet publishes it (the best particle's "
-               "ancestry through the buffer; consecutive frames may come from different particles), instead "
-               "of each track's whole MAP state sequence")
+               "ancestry through the buffer, kept to one lineage while it weighs nearly as much; consecutive "
+               "frames may come from different particles), instead of each track's whole MAP state sequence")
       ->excludes(filtered_flag);
 }
 

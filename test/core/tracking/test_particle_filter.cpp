@@ -183,18 +183,63 @@ FilterOptions historyOptions(bool keep_paths) {
   return options;
 }
 
-TEST(ParticleFilter, MapSequenceFollowsTheBestParticlesAncestry) {
+TEST(ParticleFilter, MapSequenceFollowsTheChosenParticlesAncestry) {
   ParticleFilter<History> filter(historyOptions(false));
   EXPECT_GT(runHistoryFilter(filter, 12), 0);
   std::vector<int> frames;
   const std::vector<History> sequence = filter.mapSequence(&frames);
   ASSERT_EQ(sequence.size(), 4u);
-  const History& best = filter.states()[filter.best()];
+  const History& best = filter.states()[filter.lagChoice()];
   for (size_t s = 0; s < sequence.size(); ++s) {
     EXPECT_EQ(frames[s], 9 + static_cast<int>(s));
     ASSERT_EQ(sequence[s].visited.size(), static_cast<size_t>(frames[s] + 1));
     for (size_t k = 0; k < sequence[s].visited.size(); ++k) EXPECT_EQ(sequence[s].visited[k], best.visited[k]);
   }
+}
+
+// The lagged path (the oldest buffered frame of mapSequence, as the nodelet publishes it) leaves
+// its lineage only for the best particle, and only when the best of its own lineage weighs more
+// than kLagContinuityLogRatio less: it breaks less often than the best particle's ancestry does.
+TEST(ParticleFilter, TheLaggedPathKeepsToItsLineageUnlessAnotherWeighsFarMore) {
+  FilterOptions options = historyOptions(false);
+  options.resample_ess_fraction = 0.5;
+  ParticleFilter<History> filter(options);
+  auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
+  auto propagate = [&](History& h, int frame, common::Random& random) {
+    h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
+    return likelihood(h, frame);
+  };
+  filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
+                    likelihood, 0);
+  // A path breaks when a frame's lagged state does not extend the last one's history.
+  auto continues = [](const History& before, const History& after) {
+    return after.visited.size() == before.visited.size() + 1 &&
+           std::equal(before.visited.begin(), before.visited.end(), after.visited.begin());
+  };
+  History chosen_before, best_before;
+  int chosen_breaks = 0, best_breaks = 0, chosen_not_best = 0;
+  for (int t = 1; t <= 60; ++t) {
+    filter.step(propagate, t);
+    const std::vector<double>& w = filter.logWeights();
+    const int chosen = filter.lagChoice(), best = filter.best();
+    EXPECT_GE(w[chosen], w[best] - ParticleFilter<History>::kLagContinuityLogRatio) << "frame " << t;
+    const History chosen_now = filter.mapSequence().front(), best_now = filter.ancestry(best).front();
+    if (t > options.resample_lag_frames + 1) {
+      const bool kept = continues(chosen_before, chosen_now);
+      chosen_breaks += !kept;
+      best_breaks += !continues(best_before, best_now);
+      if (chosen != best) {
+        ++chosen_not_best;
+        EXPECT_TRUE(kept) << "frame " << t << ": left its lineage for a particle that is not the best";
+      }
+    }
+    chosen_before = chosen_now;
+    best_before = best_now;
+  }
+  std::cout << "path breaks over 56 frames: kept lineage " << chosen_breaks << ", best particle's ancestry "
+            << best_breaks << " (" << chosen_not_best << " frames kept a particle other than the best)\n";
+  EXPECT_GT(chosen_not_best, 0);
+  EXPECT_LT(chosen_breaks, best_breaks);
 }
 
 // With keep_paths the whole MAP sequence is the best particle's own history from the first

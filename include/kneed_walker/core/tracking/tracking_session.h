@@ -13,8 +13,9 @@
 //     has merged with an older one (their waists nearer than `merge_distance_m`); a lost
 //     track starts again at the next frame from a person found near where it lost them
 //     (`reacquire_distance_m`), else people are looked for again;
-//   * keeps the MAP state sequence (paper §4: the ancestry of the best particle, final Δs
-//     frames later) per input frame and person.
+//   * keeps the fixed-lag MAP state sequence (paper §4: the ancestry of the best particle,
+//     kept to one lineage while it weighs nearly as much; final Δs frames later) per input
+//     frame and person.
 // Frames must come in order of stamp; reset() starts over (a bag that loops).
 #pragma once
 
