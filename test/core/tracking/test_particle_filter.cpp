@@ -157,11 +157,12 @@ TEST(ParticleFilter, SameSeedSameParticlesOnAnyNumberOfThreads) {
 }
 
 // States that carry their own history, in a filter of 200 particles stepped through `frames`
-// frames: the MAP sequences must be consistent with it. Returns the number of resamplings.
+// frames: the MAP sequences must be consistent with it. Returns the number of resamplings;
+// after_step(t), if given, is called after each step t.
 struct History {
   std::vector<int> visited;
 };
-int runHistoryFilter(ParticleFilter<History>& filter, int frames) {
+int runHistoryFilter(ParticleFilter<History>& filter, int frames, const std::function<void(int)>& after_step = {}) {
   auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
   auto propagate = [&](History& h, int frame, common::Random& random) {
     h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
@@ -170,7 +171,10 @@ int runHistoryFilter(ParticleFilter<History>& filter, int frames) {
   filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
                     likelihood, 0);
   int resamplings = 0;
-  for (int t = 1; t <= frames; ++t) resamplings += filter.step(propagate, t).resampled;
+  for (int t = 1; t <= frames; ++t) {
+    resamplings += filter.step(propagate, t).resampled;
+    if (after_step) after_step(t);
+  }
   return resamplings;
 }
 FilterOptions historyOptions(bool keep_paths) {
@@ -189,11 +193,11 @@ TEST(ParticleFilter, MapSequenceFollowsTheChosenParticlesAncestry) {
   std::vector<int> frames;
   const std::vector<History> sequence = filter.mapSequence(&frames);
   ASSERT_EQ(sequence.size(), 4u);
-  const History& best = filter.states()[filter.lagChoice()];
+  const History& chosen = filter.states()[filter.lagChoice()];
   for (size_t s = 0; s < sequence.size(); ++s) {
     EXPECT_EQ(frames[s], 9 + static_cast<int>(s));
     ASSERT_EQ(sequence[s].visited.size(), static_cast<size_t>(frames[s] + 1));
-    for (size_t k = 0; k < sequence[s].visited.size(); ++k) EXPECT_EQ(sequence[s].visited[k], best.visited[k]);
+    for (size_t k = 0; k < sequence[s].visited.size(); ++k) EXPECT_EQ(sequence[s].visited[k], chosen.visited[k]);
   }
 }
 
@@ -204,13 +208,6 @@ TEST(ParticleFilter, TheLaggedPathKeepsToItsLineageUnlessAnotherWeighsFarMore) {
   FilterOptions options = historyOptions(false);
   options.resample_ess_fraction = 0.5;
   ParticleFilter<History> filter(options);
-  auto likelihood = [](History& h, int frame) { return -std::abs(h.visited.back() - 2 * frame) * 0.5; };
-  auto propagate = [&](History& h, int frame, common::Random& random) {
-    h.visited.push_back(h.visited.back() + std::uniform_int_distribution<int>(0, 4)(random));
-    return likelihood(h, frame);
-  };
-  filter.initialize([](common::Random& random) { return History{{std::uniform_int_distribution<int>(-2, 2)(random)}}; },
-                    likelihood, 0);
   // A path breaks when a frame's lagged state does not extend the last one's history.
   auto continues = [](const History& before, const History& after) {
     return after.visited.size() == before.visited.size() + 1 &&
@@ -218,8 +215,7 @@ TEST(ParticleFilter, TheLaggedPathKeepsToItsLineageUnlessAnotherWeighsFarMore) {
   };
   History chosen_before, best_before;
   int chosen_breaks = 0, best_breaks = 0, chosen_not_best = 0;
-  for (int t = 1; t <= 60; ++t) {
-    filter.step(propagate, t);
+  runHistoryFilter(filter, 60, [&](int t) {
     const std::vector<double>& w = filter.logWeights();
     const int chosen = filter.lagChoice(), best = filter.best();
     EXPECT_GE(w[chosen], w[best] - ParticleFilter<History>::kLagContinuityLogRatio) << "frame " << t;
@@ -235,7 +231,7 @@ TEST(ParticleFilter, TheLaggedPathKeepsToItsLineageUnlessAnotherWeighsFarMore) {
     }
     chosen_before = chosen_now;
     best_before = best_now;
-  }
+  });
   std::cout << "path breaks over 56 frames: kept lineage " << chosen_breaks << ", best particle's ancestry "
             << best_breaks << " (" << chosen_not_best << " frames kept a particle other than the best)\n";
   EXPECT_GT(chosen_not_best, 0);
