@@ -19,9 +19,10 @@
 //          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
 //          ~body_poses_smoothed (kneed_walker/BodyPoseArray): the MAP poses of frame t − Δs
 //          (paper §4's fixed-lag smoother: the best particle's ancestry, kept to one lineage
-//          while it weighs nearly as much, resample_lag_frames behind) as each becomes final, and a track's last Δs frames when it ends; stamped with
-//          the frame each describes (track_offline --lagged writes the same poses), and as /tf
-//          frames with the suffix _smoothed (body_<id>_smoothed, l_knee_<id>_smoothed, ...).
+//          while it weighs nearly as much, resample_lag_frames behind) as each becomes final,
+//          and a track's last Δs frames when it ends; stamped with the frame each describes
+//          (track_offline --lagged writes the same poses), and as /tf frames with the suffix
+//          _smoothed (body_<id>_smoothed, l_knee_<id>_smoothed, ...).
 //
 // Threads: the subscriber callback only queues the frame for a worker thread and returns. Up
 // to ~image_queue_size frames wait (150: 5 s at 30 fps, through a track's first-frame search);

@@ -1,4 +1,5 @@
-// The median and percentiles of timings, for the benchmark tools (they report medians: shared machines are noisy).
+// The median and percentiles of timings, for the benchmark tools (they report medians: shared
+// machines are noisy).
 #pragma once
 
 #include <algorithm>
