@@ -39,9 +39,7 @@ void FrameEvidence::compute(const cv::Mat& bgr, const cv::Mat& previous_grey, co
     throw std::invalid_argument("the frame's size differs from the background model's");
   roi_ = roi & cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (roi_.empty()) roi_ = cv::Rect(0, 0, 1, 1);
-  // Measurements of the region only, with a margin so that its gradients are the whole image's.
-  const cv::Rect padded = cv::Rect(roi_.x - 2, roi_.y - 2, roi_.width + 4, roi_.height + 4) & cv::Rect(0, 0, bgr.cols, bgr.rows);
-  const cv::Mat z = measurements(bgr(padded))(cv::Rect(roi_.tl() - padded.tl(), roi_.size()));
+  const cv::Mat z = measurements(bgr, roi_);
   cv::Mat background_density;
   background.logDensity(z, roi_, background_density);
   const float limit = static_cast<float>(options.ratio_limit);

@@ -18,6 +18,9 @@ constexpr int kMeasurementChannels = 5;  // B, G, R, ∂I/∂x, ∂I/∂y
 
 // The measurements of one frame: CV_32FC(5), the image's size.
 cv::Mat measurements(const cv::Mat& bgr_image);
+// The measurements of the region `roi` (inside the image) of a frame, equal to those of the whole
+// frame there: computed on the region and the margin its filters reach, not on the whole frame.
+cv::Mat measurements(const cv::Mat& bgr_image, const cv::Rect& roi);
 
 struct BackgroundOptions {
   double colour_floor = 4.0;    // SD floor of each colour channel, grey levels
@@ -29,7 +32,9 @@ class BackgroundModel {
  public:
   BackgroundModel() = default;
   // From BGR 8-bit frames of one size (at least 1; 10–30 spread over a sequence are usual).
-  // Throws std::invalid_argument for no frames, mixed sizes or types.
+  // Throws std::invalid_argument for no frames, mixed sizes or types. Holds the frames'
+  // measurements a band of rows at a time: its memory beyond the frames and the model does not
+  // grow with their number.
   static BackgroundModel learn(const std::vector<cv::Mat>& frames, const BackgroundOptions& options = {});
 
   // log N(z; μ, Σ) of the measurements (from measurements()) of the image region `roi`, given
