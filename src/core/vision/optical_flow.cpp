@@ -12,15 +12,11 @@ void FlowField::compute(const cv::Mat& previous_grey, const cv::Mat& grey, const
                         const FlowOptions& o) {
   if (grey.type() != CV_8UC1 || previous_grey.type() != CV_8UC1 || grey.size() != previous_grey.size())
     throw std::invalid_argument("optical flow needs two 8-bit grey images of one size");
-  step_ = o.grid_step_px;
   if (roi.width < kMinSidePx || roi.height < kMinSidePx) {
-    points_.clear();
-    columns_ = rows_ = 0;
-    roi_ = cv::Rect();
-    grid_column_at_.assign(1, 0);
-    grid_row_at_.clear();
+    *this = FlowField();  // no flow, as before a first frame
     return;
   }
+  step_ = o.grid_step_px;
   first_column_ = (roi.x + step_ - 1) / step_;
   first_row_ = (roi.y + step_ - 1) / step_;
   columns_ = std::max(0, (roi.x + roi.width - 1) / step_ - first_column_ + 1);

@@ -32,9 +32,8 @@ class BackgroundModel {
  public:
   BackgroundModel() = default;
   // From BGR 8-bit frames of one size (at least 1; 10–30 spread over a sequence are usual).
-  // Throws std::invalid_argument for no frames, mixed sizes or types. Holds the frames'
-  // measurements a band of rows at a time: its memory beyond the frames and the model does not
-  // grow with their number.
+  // Throws std::invalid_argument for no frames, mixed sizes or types. Measures the frames 32
+  // rows at a time (per thread), not whole: 20 B a pixel of each frame held, for those rows only.
   static BackgroundModel learn(const std::vector<cv::Mat>& frames, const BackgroundOptions& options = {});
 
   // log N(z; μ, Σ) of the measurements (from measurements()) of the image region `roi`, given
