@@ -20,10 +20,6 @@ std::optional<Eigen::Vector3d> groundPointOnPlane(const Camera& camera, const Gr
   return point;
 }
 
-namespace {
-
-// The height above `foot` (on the ground) of the point on `pixel`'s ray nearest the vertical
-// through `foot`: the standing height a box's top edge gives.
 double heightAbove(const Camera& camera, const Eigen::Vector3d& foot, const Eigen::Vector2d& pixel) {
   const Eigen::Vector3d ray = camera.rays({pixel}).front().normalized();
   const Eigen::Vector3d centre = camera.centre();
@@ -36,19 +32,25 @@ double heightAbove(const Camera& camera, const Eigen::Vector3d& foot, const Eige
   return (e - b * d) / denominator;
 }
 
-}  // namespace
+cv::Mat foregroundMask(const BackgroundModel& background, const cv::Mat& bgr, const cv::Rect& roi,
+                       double foreground_squared_distance) {
+  if (bgr.type() != CV_8UC3 || bgr.size() != background.size())
+    throw std::invalid_argument("foregroundMask: the frame is not a BGR 8-bit image of the background's size");
+  cv::Mat squared;
+  background.squaredDistance(measurements(bgr, roi), roi, squared);
+  cv::Mat mask = squared > foreground_squared_distance;
+  // Speckle out, then the limbs and the trunk joined into one blob.
+  cv::morphologyEx(mask, mask, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));
+  return mask;
+}
 
 std::vector<PersonCandidate> findPeople(const BackgroundModel& background, const cv::Mat& bgr, const Camera& camera,
                                         const GroundPlane& ground, const PersonDetectorOptions& options) {
   if (bgr.type() != CV_8UC3 || bgr.size() != background.size())
     throw std::invalid_argument("findPeople: the frame is not a BGR 8-bit image of the background's size");
-  const cv::Rect whole(cv::Point(), bgr.size());
-  cv::Mat squared;
-  background.squaredDistance(measurements(bgr), whole, squared);
-  cv::Mat mask = squared > options.foreground_squared_distance;
-  // Speckle out, then the limbs and the trunk joined into one blob.
-  cv::morphologyEx(mask, mask, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
-  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));
+  const cv::Mat mask =
+      foregroundMask(background, bgr, cv::Rect(cv::Point(), bgr.size()), options.foreground_squared_distance);
   cv::Mat labels, stats, centroids;
   const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
   std::vector<PersonCandidate> people;

@@ -38,6 +38,18 @@ struct PersonCandidate {
 std::optional<Eigen::Vector3d> groundPointOnPlane(const Camera& camera, const GroundPlane& ground,
                                                   const Eigen::Vector2d& pixel);
 
+// The height above `foot` (a world point, m) of the point on `pixel`'s viewing ray nearest the
+// vertical through `foot`: the standing height of a person whose feet are at `foot` and whose
+// head is seen at `pixel`, m. 0 when the camera looks straight down.
+double heightAbove(const Camera& camera, const Eigen::Vector3d& foot, const Eigen::Vector2d& pixel);
+
+// The pixels of `roi` (inside the frame) the background does not explain: 255 where the squared
+// Mahalanobis distance exceeds `foreground_squared_distance`, speckle opened away and the limbs
+// closed onto the trunk. CV_8U, roi's size. Throws std::invalid_argument when the frame's size
+// or type does not match the background model's.
+cv::Mat foregroundMask(const BackgroundModel& background, const cv::Mat& bgr, const cv::Rect& roi,
+                       double foreground_squared_distance);
+
 // The people in a BGR frame of the camera, largest blob first. Throws std::invalid_argument
 // when the frame's size or type does not match the background model's.
 std::vector<PersonCandidate> findPeople(const BackgroundModel& background, const cv::Mat& bgr, const Camera& camera,
