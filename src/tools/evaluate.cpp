@@ -27,14 +27,25 @@
 //   knee_at_contact_deg=     mean flexion of a leg's knee at the first frame its foot is on the
 //                            ground again (truth_knee_at_contact_deg= the truth's): with the lean,
 //                            the paper's Fig. 5 findings (more of both walking uphill)
-// and the mean error per joint (`error_mm_<joint>=`). Exits 1 when no frame is in both files.
+// and the mean error per joint (`error_mm_<joint>=`). With --ground-track (track_offline
+// --out-ground-track) and --ground, the person's ground track against the truth's waist:
+//   ground_range_error_mm=   median |error| of the distance from the camera (and _p95_mm=; as a
+//                            share of the distance, ground_range_error_percent=; the median signed
+//                            error, ground_range_bias_mm=: positive too far)
+//   ground_lateral_error_mm= median error across the line of sight
+//   ground_heading_error_1s_deg=, _3s_deg=  the walking direction's error 1 s and 3 s after the
+//                            track's first frame (the truth's over ±0.5 s)
+//   ground_stature_error_mm= median error of the stature against --height
+// Exits 1 when no frame is in both files.
 //
 //   rosrun kneed_walker evaluate TRUTH.csv ESTIMATE.csv [--body ID] [--ground CAMERA.yml [--camera-unit 0.001]]
+//          [--ground-track GROUND_TRACK.csv]
 //          [--lost-mm 150] [--height 1.75] [--walker-model config/walker_model.yaml]
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -43,10 +54,12 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "kneed_walker/core/body/body_model.h"
 #include "kneed_walker/core/vision/camera.h"
 #include "kneed_walker/core/vision/ground_plane.h"
+#include "median.h"
 #include "options.h"
 #include "package_files.h"
 #include "camera_file.h"
@@ -105,17 +118,111 @@ std::map<int, Pose> readPoses(const std::string& path, const std::string& body) 
   return bodies.empty() ? std::map<int, Pose>{} : bodies.begin()->second;
 }
 
+struct GroundTrackRow {
+  double stamp_s = 0;
+  Eigen::Vector2d position_m, velocity_mps;
+  double stature_m = 0;
+};
+
+// track_offline --out-ground-track's rows of one body (empty: 1), by frame.
+std::map<int, GroundTrackRow> readGroundTrack(const std::string& path, const std::string& body) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("frame,stamp,body,x,y,vx,vy,stature", 0) != 0)
+    throw std::runtime_error(path + ": not a ground track CSV (header frame,stamp,body,x,y,vx,vy,stature,...)");
+  const int wanted = body.empty() ? 1 : std::stoi(body);
+  std::map<int, GroundTrackRow> rows;
+  for (int number = 2; std::getline(in, line); ++number) {
+    if (line.empty()) continue;
+    std::istringstream fields(line);
+    std::vector<double> values;
+    for (std::string field; std::getline(fields, field, ',') && values.size() < 8;) {
+      try {
+        values.push_back(std::stod(field));
+      } catch (const std::exception&) {
+        throw std::runtime_error(path + ":" + std::to_string(number) + ": not numbers: " + line);
+      }
+    }
+    if (values.size() < 8 || !std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); }))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 8 finite numbers first: " + line);
+    if (static_cast<int>(values[2]) != wanted) continue;
+    rows[static_cast<int>(values[0])] = {values[1], {values[3], values[4]}, {values[5], values[6]}, values[7]};
+  }
+  return rows;
+}
+
+// The ground track's figures against the truth's waist (see the header).
+void printGroundTrackFigures(const std::map<int, Pose>& truth, const std::map<int, GroundTrackRow>& track,
+                             const Eigen::Vector3d& camera_m, double height_m) {
+  using kneed_walker::tools::median;
+  using kneed_walker::tools::percentile;
+  std::vector<double> range_abs, range_signed, range_share, lateral, stature, stamps;
+  for (const auto& [frame, row] : track) stamps.push_back(row.stamp_s);
+  std::vector<double> intervals;
+  for (size_t i = 1; i < stamps.size(); ++i) intervals.push_back(stamps[i] - stamps[i - 1]);
+  const double dt = intervals.empty() ? 0 : median(intervals);
+  const auto waist = [&](int frame) -> std::optional<Eigen::Vector2d> {
+    const auto t = truth.find(frame);
+    if (t == truth.end() || !t->second.count("waist")) return std::nullopt;
+    return t->second.at("waist").head<2>();
+  };
+  const Eigen::Vector2d camera = camera_m.head<2>();
+  for (const auto& [frame, row] : track) {
+    const auto w = waist(frame);
+    if (!w) continue;
+    const double distance = (*w - camera).norm();
+    const double error = (row.position_m - camera).norm() - distance;
+    range_abs.push_back(std::abs(error));
+    range_signed.push_back(error);
+    range_share.push_back(std::abs(error) / distance);
+    const Eigen::Vector2d sight = (*w - camera).normalized();
+    const Eigen::Vector2d offset = row.position_m - *w;
+    lateral.push_back(std::abs(sight.x() * offset.y() - sight.y() * offset.x()));
+    stature.push_back(row.stature_m - height_m);
+  }
+  if (range_abs.empty()) throw std::runtime_error("--ground-track: no frame of the ground track is in the truth");
+  std::printf("ground_track_frames=%zu\n", range_abs.size());
+  std::printf("ground_range_error_mm=%.1f\nground_range_error_p95_mm=%.1f\nground_range_error_percent=%.2f\n",
+              1000 * median(range_abs), 1000 * percentile(range_abs, 95), 100 * median(range_share));
+  std::printf("ground_range_bias_mm=%.1f\nground_lateral_error_mm=%.1f\nground_stature_error_mm=%.1f\n",
+              1000 * median(range_signed), 1000 * median(lateral), 1000 * median(stature));
+  // The walking direction after 1 s and 3 s: the truth's from its waist over ±0.5 s.
+  const int half = dt > 0 ? std::max(1, static_cast<int>(std::lround(0.5 / dt))) : 1;
+  const double start_s = track.begin()->second.stamp_s;
+  for (const double after_s : {1.0, 3.0}) {
+    std::optional<double> error_deg;
+    for (const auto& [frame, row] : track) {
+      if (row.stamp_s < start_s + after_s - 1e-6) continue;
+      const auto before = waist(frame - half), after = waist(frame + half);
+      if (before && after && row.velocity_mps.norm() > 0) {
+        const Eigen::Vector2d walked = *after - *before;
+        const double difference = std::atan2(row.velocity_mps.y(), row.velocity_mps.x()) - std::atan2(walked.y(), walked.x());
+        error_deg = std::abs(std::remainder(difference, 2 * M_PI)) * 180 / M_PI;
+      }
+      break;
+    }
+    if (error_deg)
+      std::printf("ground_heading_error_%.0fs_deg=%.1f\n", after_s, *error_deg);
+    else
+      std::printf("ground_heading_error_%.0fs_deg=n/a (the track or the truth is shorter)\n", after_s);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Joint errors, lost frames, foot skate and ground penetration of a track against ground truth."};
-  std::string truth_path, estimate_path, ground_path, body;
+  std::string truth_path, estimate_path, ground_path, ground_track_path, body;
   double lost_mm = 150, contact_mm = 5, height_m = 1.75, camera_unit_m = 0.001;
   std::string walker_model = kneed_walker::tools::packageFile("config/walker_model.yaml");
   app.add_option("truth", truth_path, "ground truth CSV")->required()->check(CLI::ExistingFile);
   app.add_option("estimate", estimate_path, "estimate CSV")->required()->check(CLI::ExistingFile);
   app.add_option("--body", body, "the estimate's body (its body column) to evaluate; needed when it has several");
   app.add_option("--ground", ground_path, "calibration file with the ground plane (default: level Z = 0)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--ground-track", ground_track_path,
+                 "track_offline --out-ground-track's CSV: its figures against the truth's waist (needs --ground)")
       ->check(CLI::ExistingFile);
   app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t (with --ground)")
       ->capture_default_str()->check(FiniteRange(1e-6, 1e3));
@@ -281,6 +388,11 @@ int main(int argc, char** argv) {
       std::printf("truth_knee_at_contact_deg=%.2f %s\n", *true_contact.knee_at_contact_deg, true_landings.c_str());
     else
       std::printf("truth_knee_at_contact_deg=n/a (no landing: no foot came down in adjacent frames)\n");
+    if (!ground_track_path.empty()) {
+      if (ground_path.empty()) throw std::runtime_error("--ground-track needs --ground (the camera's position)");
+      printGroundTrackFigures(truth, readGroundTrack(ground_track_path, body),
+                              kneed_walker::tools::loadCamera("evaluate", ground_path, camera_unit_m).centre(), height_m);
+    }
     for (const auto& [joint, e] : per_joint) std::printf("error_mm_%s=%.1f\n", joint.c_str(), 1000 * e.first / e.second);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

@@ -50,6 +50,7 @@ std::vector<std::string> validate(const SessionOptions& o) {
     problems.push_back("detector.min_height_m and max_height_m must be finite with 0 < min < max");
   if (!(std::isfinite(d.min_fill) && d.min_fill >= 0 && d.min_fill <= 1))
     problems.push_back("detector.min_fill must be in [0, 1]");
+  for (std::string& problem : person::validate(o.ground_track)) problems.push_back(std::move(problem));
   return problems;
 }
 
@@ -182,6 +183,13 @@ bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int 
   }
   slot.started_input = input;
   slot.track_inputs.emplace_back(input, stamp_s);
+  // The person's ground track starts at the guess, the tracker's person height taken as given.
+  const Tracker& tracker = *slot.tracker;
+  slot.ground = std::make_unique<person::GroundTracker>(tracker.camera(), tracker.ground(), options_.ground_track,
+                                                        tracker.keepsWholePath());
+  slot.ground->start(guess.position_m, tracker.personHeightM(), stamp_s);
+  slot.ground_inputs.clear();
+  trackGround(slot, bgr, stamp_s, input, person);
   person.started = true;
   char text[160];
   std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess.position_m.x(),
@@ -230,11 +238,12 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     PersonAnswer& person = people[s];
     const TrackEstimate estimate = slot.tracker->track(bgr, stamp_s);
     slot.track_inputs.emplace_back(input, stamp_s);
+    trackGround(slot, bgr, stamp_s, input, person);
     collectMapFrames(slot, person);
     person.estimate = estimate;
     if (estimate.lost) {
       last_seen_m_ = waist(s);
-      for (MapFrame& frame : endTrack(slot)) person.map_frames.push_back(std::move(frame));
+      for (MapFrame& frame : endTrack(slot, &person)) person.map_frames.push_back(std::move(frame));
       person.ended = true;
       person.message = "lost: the best particle explains the image worse than the background; looking again";
     }
@@ -246,7 +255,7 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
       const bool b_newer = slots_[b].started_input > slots_[a].started_input ||
                            (slots_[b].started_input == slots_[a].started_input && b > a);
       if (!b_newer || (waist(a) - waist(b)).norm() >= options_.merge_distance_m) continue;
-      for (MapFrame& frame : endTrack(slots_[b])) people[b].map_frames.push_back(std::move(frame));
+      for (MapFrame& frame : endTrack(slots_[b], &people[b])) people[b].map_frames.push_back(std::move(frame));
       people[b].ended = true;
       people[b].message = "merged with body " + std::to_string(a + 1) + ": both followed one person; ended";
     }
@@ -265,7 +274,8 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     pending_guess_.reset();
     sightings_.clear();
     if (slots_[given].running()) {
-      for (MapFrame& frame : endTrack(slots_[given])) people[given].map_frames.push_back(std::move(frame));
+      for (MapFrame& frame : endTrack(slots_[given], &people[given]))
+        people[given].map_frames.push_back(std::move(frame));
       people[given].ended = true;
       people[given].message = "replaced by the track of a given guess";
     }
@@ -337,7 +347,20 @@ void TrackingSession::collectMapFrames(Slot& slot, PersonAnswer& person) {
   person.map_frames.push_back({input, stamp, poses.front()});
 }
 
-std::vector<MapFrame> TrackingSession::endTrack(Slot& slot) {
+void TrackingSession::trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person) {
+  if (!slot.ground) return;
+  person.ground_track = slot.ground->update(bgr, background_, stamp_s);
+  if (slot.tracker->keepsWholePath()) slot.ground_inputs.push_back(input);
+}
+
+std::vector<MapFrame> TrackingSession::endTrack(Slot& slot, PersonAnswer* person) {
+  if (person && slot.ground && slot.tracker->keepsWholePath()) {
+    const std::vector<person::GroundTrackEstimate> smoothed = slot.ground->smoothed();
+    for (size_t i = 0; i < smoothed.size() && i < slot.ground_inputs.size(); ++i)
+      person->ground_track_smoothed.emplace_back(slot.ground_inputs[i], smoothed[i]);
+  }
+  slot.ground.reset();
+  slot.ground_inputs.clear();
   std::vector<MapFrame> rest;
   if (slot.running()) {
     std::vector<int> frames;
@@ -424,7 +447,7 @@ std::vector<PersonAnswer> TrackingSession::finish() {
     PersonAnswer person;
     person.body = s + 1;
     person.ended = true;
-    person.map_frames = endTrack(slots_[s]);
+    person.map_frames = endTrack(slots_[s], &person);
     person.message = "the input ended";
     ended.push_back(std::move(person));
   }

@@ -70,6 +70,10 @@ void addOutputOptions(CLI::App& app, OutputOptions& output, bool& filtered, bool
   app.add_option("--out-boxes", output.boxes_path,
                  "the MAP body's image box per frame and body, as written to --out-csv (frame,x1,y1,x2,y2,body; px): "
                  "the bounding box of the projected parts' outlines");
+  app.add_option("--out-ground-track", output.ground_track_path,
+                 "each person's ground track per frame and body (frame,stamp,body,x,y,vx,vy,stature,var_x,cov_xy,"
+                 "var_y,var_vx,var_vy,var_stature,measured; m, m/s, m^2): where they stand and go on the floor from "
+                 "their silhouette alone; smoothed over each track with the whole MAP sequence, else filtered");
   auto* filtered_flag = app.add_flag("--filtered", filtered,
                                      "write each frame's best particle as it comes, instead of each track's whole MAP "
                                      "state sequence (one particle's path, written when the track ends)");
@@ -108,6 +112,7 @@ std::vector<std::string> problems(const Options& options) {
   // Two outputs on one file: one of them would be lost.
   const std::vector<std::pair<const char*, std::string>> outputs = {{"--out-csv", output.csv_path},
                                                                     {"--out-boxes", output.boxes_path},
+                                                                    {"--out-ground-track", output.ground_track_path},
                                                                     {"--overlay", output.overlay_path},
                                                                     {"--strip", output.strip_path}};
   for (size_t i = 0; i < outputs.size(); ++i)

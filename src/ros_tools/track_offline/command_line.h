@@ -41,6 +41,7 @@ enum class WrittenEstimate { kMapSequence, kLagged, kFiltered };
 struct OutputOptions {
   std::string csv_path;  // required
   std::string boxes_path, overlay_path, strip_path;
+  std::string ground_track_path;  // each person's ground track (person/ground_track.h)
   std::vector<int> strip_frames;
   WrittenEstimate estimate = WrittenEstimate::kMapSequence;
 };

@@ -36,6 +36,11 @@ Outputs::Outputs(const OutputOptions& options) : options_(options) {
     boxes_csv_.open(add("--out-boxes", options.boxes_path).temporary);
     boxes_csv_ << "frame,x1,y1,x2,y2,body\n" << std::fixed << std::setprecision(2);
   }
+  if (!options.ground_track_path.empty()) {
+    ground_csv_.open(add("--out-ground-track", options.ground_track_path).temporary);
+    ground_csv_ << "frame,stamp,body,x,y,vx,vy,stature,var_x,cov_xy,var_y,var_vx,var_vy,var_stature,measured\n"
+                << std::fixed << std::setprecision(6);
+  }
   if (!options.overlay_path.empty()) overlay_temporary_ = add("--overlay", options.overlay_path).temporary;
   if (!options.strip_path.empty()) strip_temporary_ = add("--strip", options.strip_path).temporary;
 }
@@ -56,6 +61,15 @@ void Outputs::writePose(int frame, double stamp_s, const kw::body::BodyPose& pos
   if (boxes_csv_.is_open() && !image_box.empty())
     boxes_csv_ << frame << ',' << image_box.x << ',' << image_box.y << ',' << image_box.br().x << ','
                << image_box.br().y << ',' << body << '\n';
+}
+
+void Outputs::writeGroundTrack(int frame, int body, const kw::person::GroundTrackEstimate& e) {
+  using namespace kw::person;
+  const GroundTrackMatrix& c = e.covariance;
+  ground_csv_ << frame << ',' << e.stamp_s << ',' << body << ',' << e.mean(kX) << ',' << e.mean(kY) << ','
+              << e.mean(kVx) << ',' << e.mean(kVy) << ',' << e.mean(kStature) << ',' << c(kX, kX) << ','
+              << c(kX, kY) << ',' << c(kY, kY) << ',' << c(kVx, kVx) << ',' << c(kVy, kVy) << ','
+              << c(kStature, kStature) << ',' << e.measured << '\n';
 }
 
 void Outputs::writeOverlay(const cv::Mat& picture, int frame, const std::optional<cv::Rect2d>& bodies_box) {
@@ -91,9 +105,11 @@ void Outputs::commit() {
   }
   csv_.close();
   boxes_csv_.close();
+  ground_csv_.close();
   overlay_.release();
-  if (!csv_ || (boxes_csv_.fail() && !options_.boxes_path.empty()))
-    throw std::runtime_error("--out-csv or --out-boxes: writing failed (disk full?)");
+  if (!csv_ || (boxes_csv_.fail() && !options_.boxes_path.empty()) ||
+      (ground_csv_.fail() && !options_.ground_track_path.empty()))
+    throw std::runtime_error("--out-csv, --out-boxes or --out-ground-track: writing failed (disk full?)");
   for (const File& file : temporaries_.files)
     if (std::rename(file.temporary.c_str(), file.target.c_str()) != 0)
       throw std::runtime_error(file.target + ": cannot replace it with " + file.temporary);

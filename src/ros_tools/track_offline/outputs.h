@@ -28,9 +28,12 @@ class Outputs {
   bool drawing() const { return !options_.overlay_path.empty() || !options_.strip_path.empty(); }
   void openOverlay(cv::Size size, double fps);
   bool writesBoxes() const { return !options_.boxes_path.empty(); }
+  bool writesGroundTrack() const { return !options_.ground_track_path.empty(); }
 
   // One body's joints at a frame (REP 155 body id), with its image box (empty: not written).
   void writePose(int frame, double stamp_s, const core::body::BodyPose& pose, int body, const cv::Rect2d& image_box);
+  // One body's ground track at a frame.
+  void writeGroundTrack(int frame, int body, const core::person::GroundTrackEstimate& estimate);
   // A frame's overlay picture: to the video, and to the strip when it is one of --strip-frames,
   // cropped around `bodies_box` (the tracked bodies' image boxes).
   void writeOverlay(const cv::Mat& picture, int frame, const std::optional<cv::Rect2d>& bodies_box);
@@ -52,7 +55,7 @@ class Outputs {
 
   OutputOptions options_;
   Temporaries temporaries_;
-  std::ofstream csv_, boxes_csv_;
+  std::ofstream csv_, boxes_csv_, ground_csv_;
   std::string overlay_temporary_, strip_temporary_;
   cv::VideoWriter overlay_;
   std::map<int, cv::Mat> strip_tiles_;  // by frame

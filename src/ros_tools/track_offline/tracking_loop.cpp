@@ -63,9 +63,11 @@ RunSummary TrackingLoop::run() {
                              " frames");
   const std::vector<kw::tracking::SessionAnswer> rest = session_.flushHeld();  // an input shorter than the samples
   for (size_t i = 0; i < rest.size(); ++i) answer(rest[i], i + 1 == rest.size());
-  for (const kw::tracking::PersonAnswer& person : session_.finish())
+  for (const kw::tracking::PersonAnswer& person : session_.finish()) {
     for (const kw::tracking::MapFrame& m : person.map_frames)
       if (options_.output.estimate != WrittenEstimate::kFiltered) writePose(m.input, m.stamp_s, m.pose, person.body);
+    writeGroundTrack(person, -1);
+  }
   if (summary_.tracked == 0 && summary_.interrupted_by == 0)
     throw std::runtime_error("no frame was tracked (nobody was found walking; give --init-box)");
   return summary_;
@@ -91,6 +93,15 @@ void TrackingLoop::writePose(int input, double stamp_s, const kw::body::BodyPose
                      outputs_.writesBoxes() ? session_.tracker(body).imageBox(pose) : cv::Rect2d());
 }
 
+void TrackingLoop::writeGroundTrack(const kw::tracking::PersonAnswer& person, int input) {
+  if (!outputs_.writesGroundTrack()) return;
+  // A track with its whole path gives its ground track smoothed when it ends; else each frame's.
+  if (person.ground_track && !session_.tracker(person.body).keepsWholePath())
+    outputs_.writeGroundTrack(source_index_.at(input), person.body, *person.ground_track);
+  for (const auto& [input, estimate] : person.ground_track_smoothed)
+    outputs_.writeGroundTrack(source_index_.at(input), person.body, estimate);
+}
+
 void TrackingLoop::answer(const kw::tracking::SessionAnswer& a, bool latest) {
   ++summary_.answered;
   if (a.start_failed) std::fprintf(stderr, "\ntrack_offline: frame %d: %s\n", source_index_.at(a.input), a.message.c_str());
@@ -99,6 +110,7 @@ void TrackingLoop::answer(const kw::tracking::SessionAnswer& a, bool latest) {
   for (const kw::tracking::PersonAnswer& person : a.people) {
     if (!filtered)
       for (const kw::tracking::MapFrame& m : person.map_frames) writePose(m.input, m.stamp_s, m.pose, person.body);
+    writeGroundTrack(person, a.input);
     if (!person.estimate) continue;
     const kw::tracking::TrackEstimate& estimate = *person.estimate;
     ++people_now;

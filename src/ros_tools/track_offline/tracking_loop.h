@@ -44,6 +44,9 @@ class TrackingLoop {
   // The frame's overlay: each person's body, the particle cloud of the latest frame, the state.
   void drawAnswer(const core::tracking::SessionAnswer& answer, bool latest, int people_now);
   void writePose(int input, double stamp_s, const core::body::BodyPose& pose, int body);
+  // The person's ground track as --out-ground-track wants it: this frame's (input), filtered, or
+  // the track's smoothed when it ends.
+  void writeGroundTrack(const core::tracking::PersonAnswer& person, int input);
   void skip(int frame, const std::string& problem);  // counted by reason, the first of each said
   void restartLostTrack(int frame);
   void recordTiming(const std::vector<core::tracking::SessionAnswer>& answers);

@@ -189,6 +189,38 @@ TEST(TrackingSession, KeepingTheWholePathGivesOneParticlesPathAtTheEnd) {
   EXPECT_GT(medianSlipM(lagged_path), medianSlipM(path));
 }
 
+// Each tracked frame carries its person's ground track (filtered); with the whole path kept,
+// each track's end (a loss, the input's end) gives it smoothed, one per tracked frame, near the
+// true waist.
+TEST(TrackingSession, ATrackCarriesItsPersonsGroundTrack) {
+  const test::RenderedWalk& s = scene();
+  TrackingSession session(makeTracker(300, true), holding(10));
+  session.startFromBox(truthBox());
+  std::vector<int> tracked, smoothed_inputs;
+  std::vector<double> errors;
+  const auto collect = [&](const PersonAnswer& person) {
+    for (const auto& [input, estimate] : person.ground_track_smoothed) {
+      smoothed_inputs.push_back(input);
+      errors.push_back((estimate.position() - s.walk.frames[input].pose.joints[body::kWaist].head<2>()).norm());
+    }
+  };
+  for (const SessionAnswer& a : run(session)) {
+    const PersonAnswer* person = a.person(1);
+    if (!person) continue;
+    collect(*person);
+    if (!person->estimate) continue;
+    tracked.push_back(a.input);
+    ASSERT_TRUE(person->ground_track) << "frame " << a.input;
+  }
+  for (const PersonAnswer& person : session.finish()) collect(person);
+  std::sort(smoothed_inputs.begin(), smoothed_inputs.end());
+  EXPECT_EQ(smoothed_inputs, tracked);
+  ASSERT_FALSE(errors.empty());
+  std::sort(errors.begin(), errors.end());
+  std::cout << "ground track, smoothed: median waist error " << 1e3 * errors[errors.size() / 2] << " mm\n";
+  EXPECT_LT(errors[errors.size() / 2], 0.15);  // measured 50 mm
+}
+
 // A box around no person cannot start a track: the frame is answered (waiting, saying why),
 // frames keep their numbers, and the session looks for the person instead.
 TEST(TrackingSession, ABoxAroundNobodyIsAnsweredAndThePersonFoundInstead) {

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "kneed_walker/core/person/ground_track.h"
 #include "kneed_walker/core/tracking/tracker.h"
 #include "kneed_walker/core/vision/person_detector.h"
 
@@ -52,6 +53,7 @@ struct SessionOptions {
   // heading_frames on).
   double reacquire_distance_m = 1.0;
   vision::PersonDetectorOptions detector;
+  person::GroundTrackOptions ground_track;  // each track's person's ground track
 };
 
 // Makes the tracker of a body slot (1..max_people). The trackers of a session differ only in
@@ -98,6 +100,12 @@ struct PersonAnswer {
   // MAP frames that became final with this frame: frame t − Δs while tracking, and the rest
   // of a track when it ends (a tracker that keeps the whole path: all of the track when it ends).
   std::vector<MapFrame> map_frames;
+  // The person's ground track at this frame (person/ground_track.h), filtered: where they stand
+  // and go on the floor and how tall they are, from their silhouette alone.
+  std::optional<person::GroundTrackEstimate> ground_track;
+  // When the track ends and its tracker keeps its whole path (offline): its ground track over
+  // all its frames, smoothed, with each frame's input index.
+  std::vector<std::pair<int, person::GroundTrackEstimate>> ground_track_smoothed;
   std::string message;  // what happened, for people (started where, lost, merged)
 };
 
@@ -164,6 +172,8 @@ class TrackingSession {
     std::vector<std::pair<int, double>> track_inputs;  // per tracker frame: input index, stamp
     int map_written = -1;              // the last tracker frame given as a MapFrame
     std::optional<InitialGuess> reacquire;  // its lost person, found again: the next frame starts there
+    std::unique_ptr<person::GroundTracker> ground;  // the track's person's ground track
+    std::vector<int> ground_inputs;                 // the input index of each of its frames
     bool running() const { return tracker && tracker->started(); }
   };
   SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
@@ -176,7 +186,10 @@ class TrackingSession {
   // Starts slot's track at this frame; false (and the answer says why) when the guess cannot.
   bool startTrack(int slot, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
                   PersonAnswer& person, SessionAnswer& answer);
-  std::vector<MapFrame> endTrack(Slot& slot);
+  // Ends the slot's track: the rest of its MAP frames; its smoothed ground track into `person`.
+  std::vector<MapFrame> endTrack(Slot& slot, PersonAnswer* person = nullptr);
+  // The slot's ground track's step at this frame, into `person`.
+  void trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person);
   void collectMapFrames(Slot& slot, PersonAnswer& person);
   // The slot's tracker, made again when the person's height differs from its own.
   Tracker& slotTracker(int slot, std::optional<double> person_height_m = std::nullopt);
