@@ -124,10 +124,10 @@ std::optional<SilhouetteMeasurement> measureSilhouette(const cv::Mat& bgr, const
     for (int x = expected.x; x < expected.x + expected.width; ++x) ++inside[row[x]];
   }
   std::vector<char> chosen(count, 0);
-  int best = 0;
+  int best = 0;  // the blob with most pixels inside (label 0 is the background: none)
   for (int label = 1; label < count; ++label) {
     if (2 * inside[label] >= stats.at<int>(label, cv::CC_STAT_AREA) && inside[label] > 0) chosen[label] = 1;
-    if (inside[label] > inside[best]) best = label;
+    if (inside[label] > (best > 0 ? inside[best] : 0)) best = label;
   }
   if (std::none_of(chosen.begin(), chosen.end(), [](char c) { return c; })) {
     if (best == 0) return std::nullopt;

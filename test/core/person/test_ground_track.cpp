@@ -77,6 +77,17 @@ TEST(GroundTrack, AnEdgeCutByTheSearchRegionOrTheImageIsNotSeen) {
       << "nothing of the person inside the expected box: no measurement";
 }
 
+// A prediction that has drifted: the expected box holds more background than person, and a
+// small part of the person. The person is still the one measured.
+TEST(GroundTrack, APersonMostlyOutsideTheExpectedBoxIsStillMeasured) {
+  const vision::BackgroundModel background = emptyScene();
+  const auto m = measureSilhouette(rectangleScene(40, 129, 80, 109), background, {0, 0, 200, 160},
+                                   {100, 30, 60, 110}, {});
+  ASSERT_TRUE(m);
+  EXPECT_NEAR(m->centre_u_px, 94.5, 0.05);
+  EXPECT_NEAR(m->foot_v_px, 129.5, 0.05);
+}
+
 // Measurements drawn from the filter's own model (pixel noise only; the nearer foot's offset the
 // same in every walking direction, so that the truth's and the filter's agree): the filter's
 // covariance must match its errors. The mean normalised squared position error over many runs
