@@ -67,16 +67,16 @@ namespace {
 
 // The edge between the person, whose region's last row in this column is `last_inside`, and the
 // background beyond it in `direction` (+1: below, −1: above), in image rows, by matting (see the
-// header): Σα over the rows from `reach` inside to `reach` + 1 outside the mask's edge. The
-// mask's own edge when those rows leave the image or the colours do not differ enough.
-double mattedEdge(const cv::Mat& bgr, const cv::Mat& background_mean, int x, int last_inside, int direction,
-                  double min_contrast) {
+// header): Σα over the rows from `reach` inside to `reach` + 1 outside the mask's edge. None
+// when those rows leave the image or the colours do not differ enough (a column at the blob's
+// side, where the mask's closing reaches past the person).
+std::optional<double> mattedEdge(const cv::Mat& bgr, const cv::Mat& background_mean, int x, int last_inside,
+                                 int direction, double min_contrast) {
   constexpr int kReach = 2;
-  const double mask_edge = last_inside + 0.5 * direction;
   const int first = last_inside - direction * kReach, last = last_inside + direction * (kReach + 1);
   const int inside = last_inside - direction * (kReach + 1);
   const auto in_image = [&](int row) { return row >= 0 && row < bgr.rows; };
-  if (!in_image(first) || !in_image(last) || !in_image(inside)) return mask_edge;
+  if (!in_image(first) || !in_image(last) || !in_image(inside)) return std::nullopt;
   const auto colour = [&](int row) {
     const cv::Vec3b& p = bgr.at<cv::Vec3b>(row, x);
     return Eigen::Vector3d(p[0], p[1], p[2]);
@@ -91,17 +91,19 @@ double mattedEdge(const cv::Mat& bgr, const cv::Mat& background_mean, int x, int
     const Eigen::Vector3d b = background(row);
     const Eigen::Vector3d contrast = person - b;
     const double contrast2 = contrast.squaredNorm();
-    if (contrast2 < min_contrast * min_contrast) return mask_edge;
+    if (contrast2 < min_contrast * min_contrast) return std::nullopt;
     alpha_sum += std::clamp((colour(row) - b).dot(contrast) / contrast2, 0.0, 1.0);
   }
   return first - 0.5 * direction + direction * alpha_sum;
 }
 
-double median(std::vector<double> values) {
-  const size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + middle, values.end());
-  if (values.size() % 2) return values[middle];
-  return 0.5 * (values[middle] + *std::max_element(values.begin(), values.begin() + middle));
+// The lowest (direction +1) or highest (−1) of the matted edges, else, none being matted,
+// the mask's own edge: half a pixel past the region's last row there.
+double outerEdge(const std::vector<std::optional<double>>& matted, int mask_last_row, int direction) {
+  std::optional<double> outer;
+  for (const std::optional<double>& edge : matted)
+    if (edge && (!outer || direction * (*edge - *outer) > 0)) outer = edge;
+  return outer.value_or(mask_last_row + 0.5 * direction);
 }
 
 }  // namespace
@@ -159,10 +161,11 @@ std::optional<SilhouetteMeasurement> measureSilhouette(const cv::Mat& bgr, const
       lowest[c] = y;
     }
   }
-  // The bottom (top) edge: the median matted edge of the columns that reach within a pixel of
-  // the region's lowest (highest) row.
+  // The bottom (top) edge: the lowest (highest) matted edge of the columns that reach within a
+  // pixel of the region's lowest (highest) row: the silhouette's extreme point (a median of
+  // those columns sat up to a pixel inside it where a rounded toe or heel is lowest).
   const cv::Mat& mean = background.mean();
-  std::vector<double> foot_edges, head_edges;
+  std::vector<std::optional<double>> foot_edges, head_edges;
   const int bottom = box.y + box.height - 1, top = box.y;
   for (int c = 0; c < box.width; ++c) {
     const int x = roi.x + box.x + c;
@@ -171,8 +174,8 @@ std::optional<SilhouetteMeasurement> measureSilhouette(const cv::Mat& bgr, const
     if (highest[c] >= 0 && highest[c] <= top + 1)
       head_edges.push_back(mattedEdge(bgr, mean, x, roi.y + highest[c], -1, options.min_edge_contrast));
   }
-  m.foot_v_px = median(foot_edges);
-  m.head_v_px = median(head_edges);
+  m.foot_v_px = outerEdge(foot_edges, roi.y + bottom, +1);
+  m.head_v_px = outerEdge(head_edges, roi.y + top, -1);
   // An edge on the search region's border may go on outside it: not seen.
   m.foot_seen = bottom < roi.height - 1;
   m.head_seen = top > 0;
