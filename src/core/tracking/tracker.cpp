@@ -230,8 +230,9 @@ double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose
   thread_local vision::BodyOutlines outlines;
   project(pose, outlines);
   const vision::FrameEvidence* evidence = nullptr;
+  const GroundHold* hold = nullptr;
   for (size_t i = 0; i < evidence_frames_.size(); ++i)
-    if (evidence_frames_[i] == frame) evidence = evidence_[i].get();
+    if (evidence_frames_[i] == frame) evidence = evidence_[i].get(), hold = &evidence_ground_[i];
   if (!evidence) throw std::logic_error("the tracker has no evidence for a frame it weighs");
   const bool has_previous = frame > 0 && particle.axes[body::kTorsoPart].visible;
   const double log_likelihood = vision::evaluateLikelihood(*evidence, outlines, has_previous ? &particle.axes : nullptr,
@@ -239,7 +240,21 @@ double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose
   particle.axes = vision::imageAxes(outlines);
   for (int j = 0; j < body::kNumBodyJoints; ++j) particle.joints[j] = pose.joints[j].cast<float>();
   particle.log_likelihood = static_cast<float>(log_likelihood);
-  return log_likelihood;
+  if (!hold->active) return log_likelihood;
+  // log Student-t (ν = 4, 2D) of the waist about the ground track, 0 on it: −(ν + 2)/2 log(1 + m²/ν).
+  const Eigen::Vector2d offset = pose.joints[body::kWaist].head<2>() - hold->position_m;
+  return log_likelihood - 3.0 * std::log1p(offset.dot(hold->information * offset) / 4.0);
+}
+
+Tracker::GroundHold Tracker::groundHold(const person::GroundTrackEstimate* ground_track) const {
+  GroundHold hold;
+  if (!ground_track || options_.ground_track_sd_m <= 0) return hold;
+  const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kX, person::kX) +
+                                     std::pow(options_.ground_track_sd_m, 2) * Eigen::Matrix2d::Identity();
+  hold.position_m = ground_track->position();
+  hold.information = covariance.inverse();
+  hold.active = hold.information.allFinite() && hold.position_m.allFinite();
+  return hold;
 }
 
 void Tracker::projectGuessBody(const InitialGuess& guess, vision::BodyOutlines& outlines) const {
@@ -299,7 +314,8 @@ cv::Rect Tracker::regionOfInterest() const {
   return box & cv::Rect(0, 0, camera_.width(), camera_.height());
 }
 
-TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess) {
+TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess,
+                             const person::GroundTrackEstimate* ground_track) {
   if (background_.empty()) throw std::logic_error("Tracker::start needs a background model (setBackground)");
   if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
     throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
@@ -314,6 +330,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   evidence_.clear();
   evidence_frames_.clear();
   evidence_dt_s_.clear();
+  evidence_ground_.clear();
   cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
 
   // The region the guess can reach: its spread around the position, the person's height up.
@@ -339,6 +356,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   }
   evidence_frames_.push_back(0);
   evidence_dt_s_.push_back(0.0);
+  evidence_ground_.push_back(groundHold(ground_track));
   timing_ = TrackerTiming{};
   timing_.precompute_ms = msSince(precompute_at);
 
@@ -382,9 +400,10 @@ void Tracker::stop() {
   evidence_.clear();
   evidence_frames_.clear();
   evidence_dt_s_.clear();
+  evidence_ground_.clear();
 }
 
-TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
+TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s, const person::GroundTrackEstimate* ground_track) {
   if (!filter_) throw std::logic_error("Tracker::track before start");
   if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
     throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
@@ -404,10 +423,12 @@ TrackEstimate Tracker::track(const cv::Mat& bgr, double stamp_s) {
   evidence_.push_back(std::move(evidence));
   evidence_frames_.push_back(frame_);
   evidence_dt_s_.push_back(dt_s_);
+  evidence_ground_.push_back(groundHold(ground_track));
   while (static_cast<int>(evidence_.size()) > options_.filter.resample_lag_frames + 1) {
     evidence_.erase(evidence_.begin());
     evidence_frames_.erase(evidence_frames_.begin());
     evidence_dt_s_.erase(evidence_dt_s_.begin());
+    evidence_ground_.erase(evidence_ground_.begin());
   }
   cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
   timing_ = TrackerTiming{};

@@ -46,6 +46,9 @@ const common::OptionTable<TrackerOptions>& trackerOptionTable() {
       {"lost_likelihood_fraction", [](O& o) -> OptionField { return &o.lost_likelihood_fraction; }, 0, 1, "",
        "a track is lost after 3 frames whose best log-likelihood ratio is below this fraction of its recent "
        "median (0: below 0)"},
+      {"ground_track_sd_m", [](O& o) -> OptionField { return &o.ground_track_sd_m; }, 0, 10, "m",
+       "each particle's waist is also weighed against the person's ground track, with its covariance plus this "
+       "spread (0: not held to it)"},
       {"default_frame_interval_s", [](O& o) -> OptionField { return &o.default_frame_interval_s; }, 1e-4, 1, "s",
        "the frame interval when stamps are unusable"},
       {"max_frame_gap_s", [](O& o) -> OptionField { return &o.max_frame_gap_s; }, 1e-4, 60, "s",

@@ -171,9 +171,16 @@ std::vector<SessionAnswer> TrackingSession::flushHeld() {
 bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
                                  PersonAnswer& person, SessionAnswer& answer) {
   Slot& slot = slots_[s];
+  Tracker& tracker = slotTracker(s, guess.person_height_m);
+  // The person's ground track starts at the guess, the tracker's person height taken as given,
+  // and holds the particles from the first frame on.
+  auto ground = std::make_unique<person::GroundTracker>(tracker.camera(), tracker.ground(), options_.ground_track,
+                                                        tracker.keepsWholePath());
+  ground->start(guess.position_m, tracker.personHeightM(), stamp_s);
+  const person::GroundTrackEstimate ground_estimate = ground->update(bgr, background_, stamp_s);
   TrackEstimate estimate;
   try {
-    estimate = slotTracker(s, guess.person_height_m).start(bgr, stamp_s, guess);
+    estimate = tracker.start(bgr, stamp_s, guess, &ground_estimate);
   } catch (const std::invalid_argument& e) {
     // The guess does not fit the image (e.g. a box around no person): the frame is
     // answered as waiting and the person is looked for in the image instead.
@@ -183,13 +190,10 @@ bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int 
   }
   slot.started_input = input;
   slot.track_inputs.emplace_back(input, stamp_s);
-  // The person's ground track starts at the guess, the tracker's person height taken as given.
-  const Tracker& tracker = *slot.tracker;
-  slot.ground = std::make_unique<person::GroundTracker>(tracker.camera(), tracker.ground(), options_.ground_track,
-                                                        tracker.keepsWholePath());
-  slot.ground->start(guess.position_m, tracker.personHeightM(), stamp_s);
+  slot.ground = std::move(ground);
   slot.ground_inputs.clear();
-  trackGround(slot, bgr, stamp_s, input, person);
+  if (tracker.keepsWholePath()) slot.ground_inputs.push_back(input);
+  person.ground_track = ground_estimate;
   person.started = true;
   char text[160];
   std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess.position_m.x(),
@@ -236,9 +240,10 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     Slot& slot = slots_[s];
     if (!slot.running() || s == given) continue;
     PersonAnswer& person = people[s];
-    const TrackEstimate estimate = slot.tracker->track(bgr, stamp_s);
-    slot.track_inputs.emplace_back(input, stamp_s);
     trackGround(slot, bgr, stamp_s, input, person);
+    const TrackEstimate estimate =
+        slot.tracker->track(bgr, stamp_s, person.ground_track ? &*person.ground_track : nullptr);
+    slot.track_inputs.emplace_back(input, stamp_s);
     collectMapFrames(slot, person);
     person.estimate = estimate;
     if (estimate.lost) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "kneed_walker/core/gait/gait_table.h"
+#include "kneed_walker/core/person/ground_track.h"
 #include "kneed_walker/core/prior/body_prior.h"
 #include "kneed_walker/core/tracking/particle_filter.h"
 #include "kneed_walker/core/tracking/tracker_options.h"
@@ -152,9 +153,12 @@ class Tracker {
   const vision::BackgroundModel& background() const { return background_; }
 
   // Learns the parts' appearance from `bgr` at the guess and draws the particles there.
-  TrackEstimate start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess);
+  // `ground_track`: the person's ground track at this frame, if known; the particles are held to
+  // it (TrackerOptions::ground_track_sd_m).
+  TrackEstimate start(const cv::Mat& bgr, double stamp_s, const InitialGuess& guess,
+                      const person::GroundTrackEstimate* ground_track = nullptr);
   // The next frame: propagates, weighs, resamples if needed. Frames must come in order of stamp.
-  TrackEstimate track(const cv::Mat& bgr, double stamp_s);
+  TrackEstimate track(const cv::Mat& bgr, double stamp_s, const person::GroundTrackEstimate* ground_track = nullptr);
 
   bool started() const { return filter_ != nullptr; }
   // Ends the track (started() is false until the next start()).
@@ -223,7 +227,17 @@ class Tracker {
   const prior::BodyPrior& bodyPrior() const { return *bank_.front().prior; }
   // At a heel strike: the particle's target takes its random step and its new stride walks it.
   void changeGait(TrackerParticle& particle, common::Random& random) const;
-  // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround).
+  // The ground track's hold on a frame's particles: their waist's distance from its position,
+  // weighed by `information`, the inverse of its covariance plus ground_track_sd_m² (inactive:
+  // no ground track, or not held).
+  struct GroundHold {
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
+    bool active = false;
+  };
+  GroundHold groundHold(const person::GroundTrackEstimate* ground_track) const;
+  // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround): the
+  // image likelihood, and the ground track's hold.
   double weigh(TrackerParticle& particle, int frame, const body::BodyPose& prior_pose) const;
   // A body prior's pose raised onto the ground plane.
   body::BodyPose onGround(body::BodyPose pose, const TrackerParticle& particle) const;
@@ -252,6 +266,7 @@ class Tracker {
   std::vector<std::unique_ptr<vision::FrameEvidence>> evidence_;
   std::vector<int> evidence_frames_;
   std::vector<double> evidence_dt_s_;  // the interval into each buffered frame, s
+  std::vector<GroundHold> evidence_ground_;  // the ground track's hold on each buffered frame
   std::atomic<std::int64_t> dynamics_ns_{0}, likelihood_ns_{0};
   std::atomic<int> steps_{0};
   cv::Mat previous_grey_;

@@ -55,6 +55,12 @@ struct TrackerOptions {
   // (TrackLossDetector): a body drifting off the person is then lost sooner, and a session
   // starts again from where it was.
   double lost_likelihood_fraction = 0.0;
+  // Each particle is also weighed by its waist on the ground against the person's ground track
+  // (person/ground_track.h), when the tracker is given one: a Student-t (4 degrees of freedom) of
+  // their distance, with the track's covariance plus this spread (the waist's sway about the
+  // track and the track's offsets), m. From a low camera the image likelihood barely feels
+  // depth; the feet's row does. 0: not held.
+  double ground_track_sd_m = 0.05;
 
   // Online (the nodelet): each frame's work fits into this fraction of the frame interval (from
   // the stamps): at every resampling the particle count becomes what the measured cost per
