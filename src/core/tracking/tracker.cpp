@@ -240,20 +240,39 @@ double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose
   particle.axes = vision::imageAxes(outlines);
   for (int j = 0; j < body::kNumBodyJoints; ++j) particle.joints[j] = pose.joints[j].cast<float>();
   particle.log_likelihood = static_cast<float>(log_likelihood);
-  if (!hold->active) return log_likelihood;
-  // log Student-t (ν = 4, 2D) of the waist about the ground track, 0 on it: −(ν + 2)/2 log(1 + m²/ν).
-  const Eigen::Vector2d offset = pose.joints[body::kWaist].head<2>() - hold->position_m;
-  return log_likelihood - 3.0 * std::log1p(offset.dot(hold->information * offset) / 4.0);
+  // log Student-t (ν = 4, 2D) of the waist about the ground track, 0 on it: −(ν + 2)/2 log(1 + m²/ν);
+  // and of the walk's velocity about the track's.
+  double held = log_likelihood;
+  if (hold->active) {
+    const Eigen::Vector2d offset = pose.joints[body::kWaist].head<2>() - hold->position_m;
+    held -= 3.0 * std::log1p(offset.dot(hold->information * offset) / 4.0);
+  }
+  if (hold->velocity_active) {
+    const double heading = particle.body.placement.value.heading_rad;
+    const Eigen::Vector2d offset = particle.target.speed_kmh / 3.6 * Eigen::Vector2d(std::cos(heading), std::sin(heading)) -
+                                   hold->velocity_mps;
+    held -= 3.0 * std::log1p(offset.dot(hold->velocity_information * offset) / 4.0);
+  }
+  return held;
 }
 
 Tracker::GroundHold Tracker::groundHold(const person::GroundTrackEstimate* ground_track) const {
   GroundHold hold;
-  if (!ground_track || options_.ground_track_sd_m <= 0) return hold;
-  const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kX, person::kX) +
-                                     std::pow(options_.ground_track_sd_m, 2) * Eigen::Matrix2d::Identity();
-  hold.position_m = ground_track->position();
-  hold.information = covariance.inverse();
-  hold.active = hold.information.allFinite() && hold.position_m.allFinite();
+  if (!ground_track) return hold;
+  if (options_.ground_track_sd_m > 0) {
+    const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kX, person::kX) +
+                                       std::pow(options_.ground_track_sd_m, 2) * Eigen::Matrix2d::Identity();
+    hold.position_m = ground_track->position();
+    hold.information = covariance.inverse();
+    hold.active = hold.information.allFinite() && hold.position_m.allFinite();
+  }
+  if (options_.ground_track_velocity_sd_mps > 0) {
+    const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kVx, person::kVx) +
+                                       std::pow(options_.ground_track_velocity_sd_mps, 2) * Eigen::Matrix2d::Identity();
+    hold.velocity_mps = ground_track->velocity();
+    hold.velocity_information = covariance.inverse();
+    hold.velocity_active = hold.velocity_information.allFinite() && hold.velocity_mps.allFinite();
+  }
   return hold;
 }
 

@@ -49,6 +49,8 @@ const common::OptionTable<TrackerOptions>& trackerOptionTable() {
       {"ground_track_sd_m", [](O& o) -> OptionField { return &o.ground_track_sd_m; }, 0, 10, "m",
        "each particle's waist is also weighed against the person's ground track, with its covariance plus this "
        "spread (0: not held to it)"},
+      {"ground_track_velocity_sd_mps", [](O& o) -> OptionField { return &o.ground_track_velocity_sd_mps; }, 0, 10,
+       "m/s", "... and its walk's velocity against the track's, with its covariance plus this spread (0: not held)"},
       {"default_frame_interval_s", [](O& o) -> OptionField { return &o.default_frame_interval_s; }, 1e-4, 1, "s",
        "the frame interval when stamps are unusable"},
       {"max_frame_gap_s", [](O& o) -> OptionField { return &o.max_frame_gap_s; }, 1e-4, 60, "s",

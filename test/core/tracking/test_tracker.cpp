@@ -286,9 +286,16 @@ TEST(Tracker, AGroundTrackHoldsTheBodyWhereItSays) {
     std::vector<Eigen::Vector2d> waist_offsets;
     for (size_t f = 0; f < s.frames.size(); ++f) {
       const Eigen::Vector2d waist = s.walk.frames[f].pose.joints[body::kWaist].head<2>();
+      // The track's velocity: the waist's over ±0.5 s.
+      const auto waist_at = [&](int k) {
+        return s.walk.frames[std::clamp(k, 0, static_cast<int>(s.frames.size()) - 1)].pose.joints[body::kWaist].head<2>();
+      };
+      const int f0 = std::max(0, static_cast<int>(f) - 5), f1 = std::min(static_cast<int>(s.frames.size()) - 1, static_cast<int>(f) + 5);
       person::GroundTrackEstimate ground;
       ground.mean.head<2>() = waist + track_offset.value_or(Eigen::Vector2d::Zero());
+      ground.mean.segment<2>(person::kVx) = (waist_at(f1) - waist_at(f0)) / (0.1 * (f1 - f0));
       ground.covariance.block<2, 2>(person::kX, person::kX) = 0.02 * 0.02 * Eigen::Matrix2d::Identity();
+      ground.covariance.block<2, 2>(person::kVx, person::kVx) = 0.05 * 0.05 * Eigen::Matrix2d::Identity();
       const person::GroundTrackEstimate* held = track_offset ? &ground : nullptr;
       const TrackEstimate e = f == 0 ? tracker->start(s.frames[0], 0.0, guess, held)
                                      : tracker->track(s.frames[f], 0.1 * f, held);

@@ -228,12 +228,12 @@ class Tracker {
   // At a heel strike: the particle's target takes its random step and its new stride walks it.
   void changeGait(TrackerParticle& particle, common::Random& random) const;
   // The ground track's hold on a frame's particles: their waist's distance from its position,
-  // weighed by `information`, the inverse of its covariance plus ground_track_sd_m² (inactive:
-  // no ground track, or not held).
+  // weighed by `information`, the inverse of its covariance plus ground_track_sd_m², and their
+  // walk's velocity's from its velocity, likewise (inactive: no ground track, or not held).
   struct GroundHold {
-    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
-    bool active = false;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero(), velocity_mps = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero(), velocity_information = Eigen::Matrix2d::Zero();
+    bool active = false, velocity_active = false;
   };
   GroundHold groundHold(const person::GroundTrackEstimate* ground_track) const;
   // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround): the

@@ -61,6 +61,9 @@ struct TrackerOptions {
   // track and the track's offsets), m. From a low camera the image likelihood barely feels
   // depth; the feet's row does. 0: not held.
   double ground_track_sd_m = 0.05;
+  // ... and by its walk's velocity (its target speed along its heading) against the track's,
+  // with the track's velocity covariance plus this spread, m/s. 0: not held.
+  double ground_track_velocity_sd_mps = 0.15;
 
   // Online (the nodelet): each frame's work fits into this fraction of the frame interval (from
   // the stamps): at every resampling the particle count becomes what the measured cost per
