@@ -10,7 +10,10 @@
 // mark a line: its pixel (column, row) in a frame of the camera and its position on the ground
 // in metres, in any world frame you choose on the ground (Z is up, the ground is Z = 0). Prints
 // the reprojection error of every mark and the camera's place, and writes the calibration the
-// tools and the nodelet's camera_file read (t in --camera-unit metres, default mm).
+// tools and the nodelet's camera_file read (t in --camera-unit metres, default mm). With five
+// marks or more, each is left out in turn: a mark far from where the others put the camera's
+// view (a mis-click) is named, with the calibration without it beside the one with it. A
+// calibration whose reprojection rms is over --accept-rms (3 px) is not written.
 //
 // --check draws on a frame (an image, or a video's first frame) the ground's 1 m grid, the world
 // axes (X red, Y green, 1 m), the marks (measured: green circles; where the calibration puts
@@ -131,7 +134,7 @@ cv::Mat readFrame(const std::string& path) {
 int run(int argc, char** argv) {
   CLI::App app{"A static camera's calibration (pose over the ground) from its intrinsics and ground points."};
   std::string intrinsics_path, points_path, out_path, camera_path, check_path, check_out_path;
-  double camera_unit_m = 0.001, person_height_m = 1.75;
+  double camera_unit_m = 0.001, person_height_m = 1.75, accept_rms_px = 3.0;
   std::vector<double> people_xy;
   auto* intrinsics_option = app.add_option("--intrinsics", intrinsics_path,
                                            "camera_info YAML or OpenCV calibration with camera_matrix, "
@@ -143,6 +146,9 @@ int run(int argc, char** argv) {
   auto* out_option = app.add_option("--out", out_path, "calibration to write (OpenCV YAML, as the tools read)");
   auto* camera_option = app.add_option("--camera", camera_path, "an existing calibration to check instead")
                             ->check(CLI::ExistingFile);
+  app.add_option("--accept-rms", accept_rms_px,
+                 "write the calibration only when the marks' reprojection rms is at most this, px")
+      ->capture_default_str()->check(FiniteRange(0, 1e4));
   app.add_option("--camera-unit", camera_unit_m, "metres per unit of the calibration's t")
       ->capture_default_str()->check(FiniteRange(1e-6, 1e3));
   auto* check_option = app.add_option("--check", check_path, "a frame of the camera (image, or a video's first frame) to draw on")
@@ -206,11 +212,37 @@ int run(int argc, char** argv) {
                   marks[i].pixel.x(), marks[i].pixel.y(), marks[i].ground_m.x(), marks[i].ground_m.y(),
                   fit.residuals_px[i]);
     std::printf("reprojection_rms_px=%.3f\nreprojection_max_px=%.3f\n", fit.rms_px, fit.max_px);
-    if (fit.max_px > 5)
+    // Least squares spreads one bad mark's error over all: the marks left out in turn name it.
+    const std::optional<kw::vision::DisagreeingMark> bad = kw::vision::findDisagreeingMark(intrinsics, marks);
+    if (bad) {
+      const Eigen::Vector3d with = fit.camera.centre(), without = bad->without.camera.centre();
+      std::printf("disagreeing_mark=%d\ndisagreement_px=%.1f\nwithout_it_rms_px=%.3f\nwithout_it_camera_height_m=%.3f\n",
+                  bad->index + 1, bad->disagreement_px, bad->without.rms_px, without.z());
+      char text[640];
+      std::snprintf(text, sizeof text,
+                    "mark %d does not agree with the others: it is %.1f px from where the "
+                    "other %zu marks put it. With it: rms %.1f px, the camera %.3f m up at (%.3f, %.3f); without it: "
+                    "rms %.2f px, the camera %.3f m up at (%.3f, %.3f). Check its pixel and its ground position "
+                    "(draw them with --check), or leave it out",
+                    bad->index + 1, bad->disagreement_px, marks.size() - 1, fit.rms_px, with.z(),
+                    with.x(), with.y(), bad->without.rms_px, without.z(), without.x(), without.y());
+      std::fprintf(stderr, "calibrate_camera: %s\n", text);
+    } else if (fit.max_px > 5) {
       std::fprintf(stderr,
                    "calibrate_camera: warning: a mark is %.1f px from where the calibration puts it; check its "
                    "pixel and its ground position (draw them with --check)\n",
                    fit.max_px);
+    }
+    if (fit.rms_px > accept_rms_px) {
+      std::fprintf(stderr,
+                   "calibrate_camera: the marks' reprojection rms is %.1f px, over --accept-rms %g: %s not written "
+                   "(%s; --accept-rms %.0f writes it anyway)\n",
+                   fit.rms_px, accept_rms_px, out_path.c_str(),
+                   bad ? ("mark " + std::to_string(bad->index + 1) + " does not agree").c_str()
+                       : "check the marks' pixels and ground positions",
+                   std::ceil(fit.rms_px));
+      return 1;
+    }
     try {
       fit.camera.save(out_path, camera_unit_m);
     } catch (const std::exception& e) {

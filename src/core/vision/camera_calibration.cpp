@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -185,6 +186,31 @@ GroundPoseFit solveGroundPose(const CameraIntrinsics& intrinsics,
         "no camera pose puts the camera above the ground with every point in front of it: check that "
         "each pixel belongs to its ground point (u is the column, v the row) and that x, y are metres");
   return *best;
+}
+
+std::optional<DisagreeingMark> findDisagreeingMark(const CameraIntrinsics& intrinsics,
+                                                   const std::vector<GroundPointObservation>& observations,
+                                                   double min_disagreement_px) {
+  if (observations.size() < 5) return std::nullopt;
+  std::optional<DisagreeingMark> worst;
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    std::vector<GroundPointObservation> others = observations;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(i));
+    std::optional<GroundPoseFit> without;
+    try {
+      without = solveGroundPose(intrinsics, others);
+    } catch (const std::invalid_argument&) {
+      continue;  // the others alone give no pose (on a line, say): this mark is needed
+    }
+    const GroundPointObservation& left_out = observations[i];
+    const std::optional<Eigen::Vector2d> seen =
+        without->camera.project(Eigen::Vector3d(left_out.ground_m.x(), left_out.ground_m.y(), 0));
+    const double disagreement = seen ? (*seen - left_out.pixel).norm() : std::numeric_limits<double>::infinity();
+    if (!worst || disagreement > worst->disagreement_px)
+      worst = DisagreeingMark{static_cast<int>(i), disagreement, std::move(*without)};
+  }
+  if (!worst || worst->disagreement_px <= std::max(min_disagreement_px, 3 * worst->without.rms_px)) return std::nullopt;
+  return worst;
 }
 
 }  // namespace kneed_walker::core::vision

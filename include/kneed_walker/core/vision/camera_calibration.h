@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,5 +57,19 @@ struct GroundPoseFit {
 // above the ground and every point in front of it.
 GroundPoseFit solveGroundPose(const CameraIntrinsics& intrinsics,
                               const std::vector<GroundPointObservation>& observations);
+
+// A mark that does not agree with the others (a mis-click, a mis-measured position): least
+// squares spreads its error over every mark, so its own residual understates it. Each mark is
+// left out in turn and the pose fitted from the rest; the mark furthest from where the others'
+// pose puts it is the one, when that distance is over `min_disagreement_px` and over three times
+// the others' rms. Needs five marks or more (four remain); nullopt when none disagrees.
+struct DisagreeingMark {
+  int index = 0;                 // into the observations, from 0
+  double disagreement_px = 0;    // its distance from where the others' pose puts it
+  GroundPoseFit without;         // the pose from the others (residuals over them)
+};
+std::optional<DisagreeingMark> findDisagreeingMark(const CameraIntrinsics& intrinsics,
+                                                   const std::vector<GroundPointObservation>& observations,
+                                                   double min_disagreement_px = 5.0);
 
 }  // namespace kneed_walker::core::vision
