@@ -16,7 +16,6 @@
 // so an interrupted run continues with --resume. With --polish, every feasible gait is then
 // solved again from its neighbours' gaits, sweep after sweep, and the lowest effort kept
 // (optimizer::polishTable).
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 
@@ -33,6 +32,7 @@
 #include "kneed_walker/core/optimizer/table_growth.h"
 #include "kneed_walker/core/optimizer/table_polish.h"
 #include "options.h"
+#include "progress.h"
 #include "tool_main.h"
 #include "package_files.h"
 
@@ -310,13 +310,12 @@ int run(int argc, char** argv) {
     }
   }
 
-  const bool tty = isatty(STDERR_FILENO);
+  kneed_walker::tools::ProgressReport report;
   auto progress = [&](const kw::optimizer::GrowthProgress& p) {
-    const int width = 30, filled = width * p.solved / p.points;
     const double rate = elapsed() / std::max(1, p.solved);
-    std::fprintf(stderr, "%s[%s%s] %d/%d solved, %d feasible | %s elapsed, ~%s left%s", tty ? "\r" : "",
-                 std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), p.solved, p.points,
-                 p.feasible, clock(elapsed()).c_str(), clock(rate * (p.points - p.solved)).c_str(), tty ? "" : "\n");
+    report.update(p.solved, p.points,
+                  "solved, " + std::to_string(p.feasible) + " feasible | " + clock(elapsed()) + " elapsed, ~" +
+                      clock(rate * (p.points - p.solved)) + " left");
   };
   kw::optimizer::GrowthProgress before{0, 0, grid.size()};
   for (const auto& e : table.entries) before.solved += e.solved, before.feasible += e.feasible;
@@ -326,6 +325,7 @@ int run(int argc, char** argv) {
                              writeAtomically(out, grown);
                              progress(p);
                            });
+  report.finish();
 
   // Written here too: a resume that solved no point may still have re-marked stale gaits or
   // regridded the table, and the workers only write after solving one.
@@ -340,26 +340,30 @@ int run(int argc, char** argv) {
     };
     const double effort_before = summedEffort();
     int last_sweep = 0;
+    kneed_walker::tools::ProgressReport sweep_report;
     // Written after every sweep: an interrupted polish keeps the sweeps it finished.
     const kw::optimizer::PolishReport report = kw::optimizer::polishTable(
         table, options, threads, polish_sweeps, 1e-3,
         [&](const kw::optimizer::PolishProgress& p) {
-          if (p.sweep != last_sweep && last_sweep > 0 && tty) std::fprintf(stderr, "\n");
+          if (p.sweep != last_sweep) {  // each sweep its own bar
+            sweep_report.finish();
+            sweep_report = kneed_walker::tools::ProgressReport();
+          }
           last_sweep = p.sweep;
-          const int width = 30, filled = width * p.done / std::max(1, p.points);
-          std::fprintf(stderr, "%spolish sweep %d [%s%s] %d/%d gaits, %d improved | %s elapsed%s", tty ? "\r" : "",
-                       p.sweep, std::string(filled, '#').c_str(), std::string(width - filled, '-').c_str(), p.done,
-                       p.points, p.improved, clock(elapsed() - polish_start).c_str(), tty ? "" : "\n");
+          sweep_report.update(p.done, p.points,
+                              "gaits of polish sweep " + std::to_string(p.sweep) + ", " + std::to_string(p.improved) +
+                                  " improved | " + clock(elapsed() - polish_start) + " elapsed");
         },
         [&](const kw::gait::GaitTable& polished) { writeAtomically(out, polished); });
-    std::fprintf(stderr, "%soptimize_gaits: polished in %d sweeps (%d solves, %s): %d gaits of lower effort, "
-                 "summed effort %.4g -> %.4g\n", tty ? "\n" : "", report.sweeps, report.solves,
+    sweep_report.finish();
+    std::fprintf(stderr, "optimize_gaits: polished in %d sweeps (%d solves, %s): %d gaits of lower effort, "
+                 "summed effort %.4g -> %.4g\n", report.sweeps, report.solves,
                  clock(elapsed() - polish_start).c_str(), report.improved_points, effort_before, summedEffort());
   }
   int feasible = 0, unreached = 0;
   for (const auto& e : table.entries) feasible += e.feasible, unreached += !e.solved;
-  std::fprintf(stderr, "%soptimize_gaits: %d of %d gaits feasible, %d unreached, in %s on %d threads; wrote %s\n",
-               tty ? "\n" : "", feasible, grid.size(), unreached, clock(elapsed()).c_str(),
+  std::fprintf(stderr, "optimize_gaits: %d of %d gaits feasible, %d unreached, in %s on %d threads; wrote %s\n",
+               feasible, grid.size(), unreached, clock(elapsed()).c_str(),
                threads, out.c_str());
   return 0;
 }

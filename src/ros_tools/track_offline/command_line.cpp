@@ -3,8 +3,11 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
+#include <set>
 #include <utility>
 
 #include "options.h"  // src/tools: addTableOptions, FiniteRange
@@ -124,6 +127,68 @@ std::vector<std::string> problems(const Options& options) {
   return found;
 }
 
+// Options renamed when the command line took the ROS parameters' names (2026-12-06): the old
+// name is taken for a while, with a warning naming the new one. `value`: the value a renamed
+// flag stands for.
+struct RenamedOption {
+  const char* old_name;
+  const char* new_name;
+  const char* value = nullptr;
+};
+constexpr RenamedOption kRenamedOptions[] = {
+    {"--particles", "--num-particles"},
+    {"--threads", "--num-threads"},
+    {"--resample-lag", "--resample-lag-frames"},
+    {"--height", "--person-height-m"},
+    {"--breadth", "--person-breadth-scale"},
+    {"--min-speed", "--min-start-speed-kmh"},
+    {"--max-speed", "--max-start-speed-kmh"},
+    {"--min-gait-speed", "--min-gait-speed-kmh"},
+    {"--min-gait-step", "--min-gait-step-m"},
+    {"--gait-speed-sd", "--gait-speed-sd-kmh"},
+    {"--gait-step-sd", "--gait-step-sd-m"},
+    {"--gait-slope-change", "--gait-slope-change-probability"},
+    {"--lost-fraction", "--lost-likelihood-fraction"},
+    {"--flow-min-sd", "--flow-min-sd-px"},
+    {"--no-flow", "--use-optical-flow", "false"},
+};
+// Options removed then, each with what to give instead.
+constexpr std::pair<const char*, const char*> kRemovedOptions[] = {
+    {"--ess-threshold", "give --resample-ess-fraction, the threshold as a fraction of --num-particles"},
+    {"--estimate-height", "give the person's height with --person-height-m"},
+    {"--hill-gaits", "the particles walk the nearest slope's gaits and those between it and the level"},
+    {"--contact-weight", "the ground contact term was removed"},
+};
+
+// The arguments with each old option name replaced by its new one (a warning says so); empty,
+// with the problem printed, when one names a removed option.
+std::optional<std::vector<std::string>> withCurrentOptionNames(int argc, char** argv) {
+  std::vector<std::string> arguments{argv[0]};
+  std::set<std::string> warned;
+  for (int i = 1; i < argc; ++i) {
+    const std::string argument = argv[i];
+    const std::size_t equals = argument.find('=');
+    const std::string name = argument.substr(0, equals);
+    for (const auto& [removed, instead] : kRemovedOptions)
+      if (name == removed) {
+        std::fprintf(stderr, "track_offline: %s was removed: %s\n", removed, instead);
+        return std::nullopt;
+      }
+    const auto renamed = std::find_if(std::begin(kRenamedOptions), std::end(kRenamedOptions),
+                                      [&](const RenamedOption& r) { return name == r.old_name; });
+    if (renamed == std::end(kRenamedOptions)) {
+      arguments.push_back(argument);
+      continue;
+    }
+    if (warned.insert(name).second)
+      std::fprintf(stderr, "track_offline: warning: %s is an old name, taken for now: it is %s%s%s\n", name.c_str(),
+                   renamed->new_name, renamed->value ? " " : "", renamed->value ? renamed->value : "");
+    arguments.push_back(renamed->new_name + (equals == std::string::npos ? "" : argument.substr(equals)));
+    if (renamed->value) arguments.push_back(renamed->value);
+  }
+  return arguments;
+}
+
 }  // namespace
 
 std::optional<Options> parseOptions(int argc, char** argv, int& exit_code) {
@@ -149,8 +214,15 @@ std::optional<Options> parseOptions(int argc, char** argv, int& exit_code) {
     exit_code = 1;
     return std::nullopt;
   }
+  std::optional<std::vector<std::string>> arguments = withCurrentOptionNames(argc, argv);
+  if (!arguments) {
+    exit_code = 1;
+    return std::nullopt;
+  }
+  std::vector<char*> pointers;
+  for (std::string& argument : *arguments) pointers.push_back(argument.data());
   try {
-    app.parse(argc, argv);
+    app.parse(static_cast<int>(pointers.size()), pointers.data());
   } catch (const CLI::ParseError& e) {
     exit_code = app.exit(e);
     return std::nullopt;

@@ -1,7 +1,6 @@
 #include "tracking_loop.h"
 
 #include <opencv2/imgproc.hpp>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -21,7 +20,6 @@ TrackingLoop::TrackingLoop(const Options& options, Input& input, kw::tracking::T
     : options_(options), input_(input), session_(session), start_(start), outputs_(outputs) {}
 
 RunSummary TrackingLoop::run() {
-  const bool tty = isatty(STDERR_FILENO);
   const int first_frame = options_.input.first_frame, max_frames = options_.input.max_frames;
   Frame frame;
   int index = 0;
@@ -55,9 +53,9 @@ RunSummary TrackingLoop::run() {
     if (outputs_.drawing()) unanswered_[session_.framesFed() - 1] = frame.bgr.clone();
     for (size_t i = 0; i < answers.size(); ++i) answer(answers[i], i + 1 == answers.size());
     recordTiming(answers);
-    printProgress(tty);
+    printProgress();
   }
-  if (tty) std::fprintf(stderr, "\n");
+  progress_.finish();
   if (index <= first_frame && summary_.interrupted_by == 0)
     throw std::runtime_error("--first-frame " + std::to_string(first_frame) + ": the input has " + std::to_string(index) +
                              " frames");
@@ -177,15 +175,11 @@ void TrackingLoop::recordTiming(const std::vector<kw::tracking::SessionAnswer>& 
   summary_.particles_ms.push_back(particles);
 }
 
-void TrackingLoop::printProgress(bool tty) {
+void TrackingLoop::printProgress() {
   const int total = input_.frames->count(), first_frame = options_.input.first_frame;
   const int max_frames = options_.input.max_frames;
   const int todo = max_frames > 0 ? std::min(max_frames, total - first_frame) : total - first_frame;
-  const int fed = session_.framesFed();
-  const int width = 30, filled = todo > 0 ? std::min(width, width * fed / todo) : width;
-  std::fprintf(stderr, "%s[%s%s] %d/%d frames, %s%s", tty ? "\r" : "", std::string(filled, '#').c_str(),
-               std::string(width - filled, '-').c_str(), fed, todo, kw::tracking::stateName(session_.state()),
-               tty ? "        " : "\n");
+  progress_.update(session_.framesFed(), todo, std::string("frames, ") + kw::tracking::stateName(session_.state()));
 }
 
 void printSummary(const RunSummary& s, const Options& options) {

@@ -13,6 +13,7 @@
 #include "input.h"
 #include "outputs.h"
 #include "person_start.h"
+#include "progress.h"  // src/tools
 
 namespace kneed_walker::tools::track_offline {
 
@@ -50,7 +51,7 @@ class TrackingLoop {
   void skip(int frame, const std::string& problem);  // counted by reason, the first of each said
   void restartLostTrack(int frame);
   void recordTiming(const std::vector<core::tracking::SessionAnswer>& answers);
-  void printProgress(bool tty);
+  void printProgress();
 
   const Options& options_;
   Input& input_;
@@ -61,6 +62,7 @@ class TrackingLoop {
   std::vector<int> source_index_;          // per session input: the input's frame index
   std::map<int, cv::Mat> unanswered_;      // frames held by the session, for the overlay
   std::optional<cv::Point2d> lost_at_px_;  // where a lost track was last seen
+  ProgressReport progress_;
 };
 
 // The run's figures on stdout (frames, restarts, timing medians).
