@@ -21,6 +21,8 @@ const common::OptionTable<GroundTrackOptions>& groundTrackOptionTable() {
        1000, "", "a pixel is the person's when its squared Mahalanobis distance from the background is above this"},
       {"ground_min_pixels", [](O& o) -> OptionField { return &o.min_pixels; }, 1, 100000, "px",
        "the smallest region the ground track takes for the person"},
+      {"ground_max_width_ratio", [](O& o) -> OptionField { return &o.max_width_ratio; }, 1, 100, "",
+       "a region wider than this many times one person's expected box is people merged: not measured"},
       {"ground_min_edge_contrast", [](O& o) -> OptionField { return &o.min_edge_contrast; }, 0, 442, "grey levels",
        "an edge is matted when the person's colour differs from the background's by this, else the mask's"},
       {"ground_centre_sd_m", [](O& o) -> OptionField { return &o.centre_sd_m; }, 0, 1, "m",
@@ -147,7 +149,7 @@ std::optional<SilhouetteMeasurement> measureSilhouette(const cv::Mat& bgr, const
                        stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
     box = box.area() ? (box | own) : own;
   }
-  if (m.pixels < options.min_pixels) return std::nullopt;
+  if (m.pixels < options.min_pixels || box.width > options.max_width_ratio * expected_px.width) return std::nullopt;
   m.box_px = box + roi.tl();
   m.centre_u_px = roi.x + column_sum / m.pixels;
   // Each column's lowest and highest pixel of the region.

@@ -240,40 +240,29 @@ double Tracker::weigh(TrackerParticle& particle, int frame, const body::BodyPose
   particle.axes = vision::imageAxes(outlines);
   for (int j = 0; j < body::kNumBodyJoints; ++j) particle.joints[j] = pose.joints[j].cast<float>();
   particle.log_likelihood = static_cast<float>(log_likelihood);
-  // log Student-t (ν = 4, 2D) of the waist about the ground track, 0 on it: −(ν + 2)/2 log(1 + m²/ν);
-  // and of the walk's velocity about the track's.
-  double held = log_likelihood;
-  if (hold->active) {
-    const Eigen::Vector2d offset = pose.joints[body::kWaist].head<2>() - hold->position_m;
-    held -= 3.0 * std::log1p(offset.dot(hold->information * offset) / 4.0);
-  }
-  if (hold->velocity_active) {
-    const double heading = particle.body.placement.value.heading_rad;
-    const Eigen::Vector2d offset = particle.target.speed_kmh / 3.6 * Eigen::Vector2d(std::cos(heading), std::sin(heading)) -
-                                   hold->velocity_mps;
-    held -= 3.0 * std::log1p(offset.dot(hold->velocity_information * offset) / 4.0);
-  }
-  return held;
+  const double heading = particle.body.placement.value.heading_rad;
+  return log_likelihood + hold->position.logDensity(pose.joints[body::kWaist].head<2>()) +
+         hold->velocity.logDensity(particle.target.speed_kmh / 3.6 * Eigen::Vector2d(std::cos(heading), std::sin(heading)));
+}
+
+double Tracker::HeldVector::logDensity(const Eigen::Vector2d& value) const {
+  if (!active) return 0;
+  // log Student-t (ν = 4, 2D), 0 at the mean: −(ν + 2)/2 log(1 + m²/ν).
+  const Eigen::Vector2d offset = value - mean;
+  return -3.0 * std::log1p(offset.dot(information * offset) / 4.0);
 }
 
 Tracker::GroundHold Tracker::groundHold(const person::GroundTrackEstimate* ground_track) const {
-  GroundHold hold;
-  if (!ground_track) return hold;
-  if (options_.ground_track_sd_m > 0) {
-    const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kX, person::kX) +
-                                       std::pow(options_.ground_track_sd_m, 2) * Eigen::Matrix2d::Identity();
-    hold.position_m = ground_track->position();
-    hold.information = covariance.inverse();
-    hold.active = hold.information.allFinite() && hold.position_m.allFinite();
-  }
-  if (options_.ground_track_velocity_sd_mps > 0) {
-    const Eigen::Matrix2d covariance = ground_track->covariance.block<2, 2>(person::kVx, person::kVx) +
-                                       std::pow(options_.ground_track_velocity_sd_mps, 2) * Eigen::Matrix2d::Identity();
-    hold.velocity_mps = ground_track->velocity();
-    hold.velocity_information = covariance.inverse();
-    hold.velocity_active = hold.velocity_information.allFinite() && hold.velocity_mps.allFinite();
-  }
-  return hold;
+  // The track's mean and covariance of (x, y) or (vx, vy) from `first`, the covariance widened by sd².
+  const auto held = [&](int first, double sd) {
+    HeldVector v;
+    if (!ground_track || sd <= 0) return v;
+    v.mean = ground_track->mean.segment<2>(first);
+    v.information = (ground_track->covariance.block<2, 2>(first, first) + sd * sd * Eigen::Matrix2d::Identity()).inverse();
+    v.active = v.information.allFinite() && v.mean.allFinite();
+    return v;
+  };
+  return {held(person::kX, options_.ground_track_sd_m), held(person::kVx, options_.ground_track_velocity_sd_mps)};
 }
 
 void Tracker::projectGuessBody(const InitialGuess& guess, vision::BodyOutlines& outlines) const {

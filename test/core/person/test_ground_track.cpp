@@ -88,6 +88,18 @@ TEST(GroundTrack, APersonMostlyOutsideTheExpectedBoxIsStillMeasured) {
   EXPECT_NEAR(m->foot_v_px, 129.5, 0.05);
 }
 
+// Two people side by side merge into one region twice as wide as one: it is not measured.
+TEST(GroundTrack, PeopleMergedIntoOneRegionAreNotMeasured) {
+  const vision::BackgroundModel background = emptyScene();
+  cv::Mat image = rectangleScene(40, 129, 60, 89);
+  rectangleScene(40, 129, 90, 119).colRange(90, 120).copyTo(image.colRange(90, 120));
+  EXPECT_TRUE(measureSilhouette(image, background, {0, 0, 200, 160}, {55, 30, 40, 110}, {}))
+      << "60 px wide for a box of 40: one person with a long stride";
+  const cv::Mat merged = rectangleScene(40, 129, 50, 109);
+  EXPECT_FALSE(measureSilhouette(merged, background, {0, 0, 200, 160}, {55, 30, 25, 110}, {}))
+      << "60 px wide for a box of 25";
+}
+
 // Measurements drawn from the filter's own model (pixel noise only; the nearer foot's offset the
 // same in every walking direction, so that the truth's and the filter's agree): the filter's
 // covariance must match its errors. The mean normalised squared position error over many runs

@@ -44,6 +44,9 @@ namespace kneed_walker::core::person {
 struct GroundTrackOptions {
   double foreground_squared_distance = 30.0;  // the foreground's threshold (vision::foregroundMask)
   int min_pixels = 30;                        // smallest region that is a person, px
+  // A region wider than this many times the expected box (a person 0.6 m across) is people
+  // merged (walking side by side, passing): not measured.
+  double max_width_ratio = 2.0;
   double min_edge_contrast = 20.0;  // |F − B| below which an edge is the mask's edge, not matted, grey levels
   double centre_sd_m = 0.04;        // the silhouette's centroid about the body's axis (arms, legs), m
   double centre_sd_px = 1.0;
@@ -89,7 +92,7 @@ struct SilhouetteMeasurement {
 
 // The person's region in `search_px` (clipped to the frame): the foreground blobs with most of
 // their pixels inside `expected_px`, else the one with most pixels there; nullopt when none has
-// min_pixels. Throws std::invalid_argument when the frame does not match the background model.
+// min_pixels, or when the region is over max_width_ratio times as wide as `expected_px`. Throws std::invalid_argument when the frame does not match the background model.
 std::optional<SilhouetteMeasurement> measureSilhouette(const cv::Mat& bgr, const vision::BackgroundModel& background,
                                                        const cv::Rect& search_px, const cv::Rect2d& expected_px,
                                                        const GroundTrackOptions& options);

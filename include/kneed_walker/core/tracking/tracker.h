@@ -227,13 +227,17 @@ class Tracker {
   const prior::BodyPrior& bodyPrior() const { return *bank_.front().prior; }
   // At a heel strike: the particle's target takes its random step and its new stride walks it.
   void changeGait(TrackerParticle& particle, common::Random& random) const;
-  // The ground track's hold on a frame's particles: their waist's distance from its position,
-  // weighed by `information`, the inverse of its covariance plus ground_track_sd_m², and their
-  // walk's velocity's from its velocity, likewise (inactive: no ground track, or not held).
+  // The ground track's hold on a frame's particles: their waist against its position (m), with
+  // `information` the inverse of its covariance plus ground_track_sd_m², and their walk's velocity
+  // against its velocity (m/s), likewise (inactive: no ground track, or not held).
+  struct HeldVector {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
+    bool active = false;
+    double logDensity(const Eigen::Vector2d& value) const;  // a Student-t's, 0 at the mean; 0 inactive
+  };
   struct GroundHold {
-    Eigen::Vector2d position_m = Eigen::Vector2d::Zero(), velocity_mps = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d information = Eigen::Matrix2d::Zero(), velocity_information = Eigen::Matrix2d::Zero();
-    bool active = false, velocity_active = false;
+    HeldVector position, velocity;
   };
   GroundHold groundHold(const person::GroundTrackEstimate* ground_track) const;
   // Weighs a particle by `frame`, its pose as the body prior gave it (before onGround): the
