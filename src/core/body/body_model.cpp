@@ -107,6 +107,7 @@ BodyPose bodyPose(const dynamics::KinematicMap& map, const dynamics::WalkerState
   const Eigen::Vector3d down = -lift * pose.up;
   for (Eigen::Vector3d& joint : pose.joints) joint += down;
   for (Eigen::Vector3d& foot : pose.foot_centres) foot += down;
+  pose.ground_point_m = origin;  // the slope frame's origin lies on the ground (y = 0)
   return pose;
 }
 

@@ -227,6 +227,7 @@ body::BodyPose capturedBodyPose(const CapturedMotion& motion, const std::vector<
   pose.forward = forward.normalized();
   pose.up = Eigen::Vector3d::UnitZ();
   pose.left = pose.up.cross(pose.forward);
+  pose.ground_point_m = Eigen::Vector3d::Zero();  // the capture stands on z = 0 (capturedPlacement)
   return pose;
 }
 

@@ -85,9 +85,11 @@ cv::Mat texturedGround(const vision::Camera& camera, const vision::GroundPlane& 
 
 void drawPerson(cv::Mat& image, const vision::Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                 const PersonAppearance& appearance) {
+  // A person's feet stand on the floor, not in it.
+  vision::PartAxes axes = vision::partAxes(pose, shape);
+  vision::standFeetOnGround(pose, shape, axes);
   vision::BodyOutlines outlines;
-  vision::projectBodyPartsExactly(camera, pose, shape, outlines);
-  const vision::PartAxes axes = vision::partAxes(pose, shape);
+  vision::projectBodyPartsExactly(camera, pose, shape, axes, outlines);
   const Eigen::Vector3d eye = camera.centre();
   std::array<int, body::kNumBodyParts> order;
   std::array<double, body::kNumBodyParts> distance;

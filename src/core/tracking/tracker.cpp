@@ -199,6 +199,7 @@ body::BodyPose Tracker::onGround(body::BodyPose pose, const TrackerParticle& par
   const double lift = ground_.height(particle.body.placement.value.ground_origin_m);
   for (auto& joint : pose.joints) joint.z() += lift;
   for (auto& foot : pose.foot_centres) foot.z() += lift;
+  pose.ground_point_m.z() += lift;
   return pose;
 }
 

@@ -72,6 +72,22 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape) {
   return axes;
 }
 
+void standFeetOnGround(const body::BodyPose& pose, const body::BodyShape& shape, PartAxes& axes) {
+  for (const int foot : {body::kLeftFootPart, body::kRightFootPart}) {
+    const PartFrame frame = partFrame(pose, axes, foot);
+    const body::PartShape& part = shape.parts[foot];
+    // A tapered cylinder reaches lowest at one of its end ellipses.
+    auto below_ground_m = [&](const Eigen::Vector3d& centre, double width_m, double depth_m) {
+      const double reach_down_m = 0.5 * std::hypot(width_m * frame.across.dot(pose.up), depth_m * frame.depth.dot(pose.up));
+      return reach_down_m - (centre - pose.ground_point_m).dot(pose.up);
+    };
+    const double lift_m = std::max({0.0, below_ground_m(axes.proximal[foot], part.proximal_width_m, part.proximal_depth_m),
+                                    below_ground_m(axes.distal[foot], part.distal_width_m, part.distal_depth_m)});
+    axes.proximal[foot] += lift_m * pose.up;
+    axes.distal[foot] += lift_m * pose.up;
+  }
+}
+
 void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
                       BodyOutlines& outlines) {
   constexpr int K = kOutlineVertices;
@@ -134,8 +150,7 @@ void projectBodyParts(const Camera& camera, const body::BodyPose& pose, const bo
 }
 
 void projectBodyPartsExactly(const Camera& camera, const body::BodyPose& pose, const body::BodyShape& shape,
-                             BodyOutlines& outlines) {
-  const PartAxes axes = partAxes(pose, shape);
+                             const PartAxes& axes, BodyOutlines& outlines) {
   // The sample directions around an ellipse, computed once.
   static const auto directions = [] {
     std::array<std::array<double, kOutlineSamples>, 2> cs;

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <iostream>
 #include <limits>
 
 #include "kneed_walker/core/optimizer/periodic_gait.h"
@@ -57,6 +59,49 @@ TEST(BodyProjection, PartsAreNamedAndRunBetweenTheirJoints) {
     EXPECT_NEAR(foot.norm(), scene.shape.foot_length_m, 1e-12);
     EXPECT_GT(foot.dot(scene.pose.forward), 0.5 * foot.norm()) << "feet point forward";
   }
+}
+
+// The walker's rolling foot is an arc: with the drawn foot rigid with the shank, a tilted stance
+// shank puts its heel or toe into the ground. Stood on the ground, over a stride the feet stay on
+// or above it, and the stance foot stands on it.
+TEST(BodyProjection, FeetStoodOnTheGroundAreNotInIt) {
+  const Scene scene;
+  dynamics::WalkerSimulator sim = scene.sim;
+  dynamics::WalkerState s = optimizer::fromDimensionless(optimizer::mcGeerPassiveGait().start, sim);
+  dynamics::WalkerControls passive;
+  passive.ground_slope = optimizer::kMcGeerSlope;
+  body::BodyPlacement placement;
+  placement.heading_rad = 0.3;
+  double deepest_m = std::numeric_limits<double>::infinity(), stance_highest_m = 0;
+  for (int step = 0; step < 60; ++step) {
+    sim.advance(passive, s, 0.02);
+    placement.hip_abduction_rad = {0.05 * std::sin(0.3 * step), -0.04};
+    const body::BodyPose pose = body::bodyPose(sim.map(), s, passive.ground_slope, placement, scene.shape);
+    PartAxes axes = partAxes(pose, scene.shape);
+    standFeetOnGround(pose, scene.shape, axes);
+    const int stance = s.stance_leg == dynamics::Leg::kLeft ? 0 : 1;
+    for (int side = 0; side < 2; ++side) {
+      const int foot = body::kLeftFootPart + side;
+      const PartFrame frame = partFrame(pose, axes, foot);
+      const body::PartShape& part = scene.shape.parts[foot];
+      double lowest_m = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 72; ++k) {  // each end's rim, sampled
+        const double t = 2 * M_PI * k / 72;
+        for (const bool proximal : {true, false}) {
+          const Eigen::Vector3d point = (proximal ? axes.proximal[foot] : axes.distal[foot]) +
+                                        0.5 * std::cos(t) * (proximal ? part.proximal_width_m : part.distal_width_m) * frame.across +
+                                        0.5 * std::sin(t) * (proximal ? part.proximal_depth_m : part.distal_depth_m) * frame.depth;
+          lowest_m = std::min(lowest_m, (point - pose.ground_point_m).dot(pose.up));
+        }
+      }
+      deepest_m = std::min(deepest_m, lowest_m);
+      if (side == stance) stance_highest_m = std::max(stance_highest_m, lowest_m);
+    }
+  }
+  std::cout << "drawn feet: lowest " << deepest_m * 1e3 << " mm above the ground; the stance foot at most "
+            << stance_highest_m * 1e3 << " mm above it\n";
+  EXPECT_GT(deepest_m, -1e-4);
+  EXPECT_LT(stance_highest_m, 0.02);
 }
 
 TEST(BodyProjection, OutlinesAreConvexAndCoverTheirAxes) {
@@ -131,7 +176,7 @@ TEST(BodyProjection, OutlinesMatchTheExactPerspectiveImage) {
     }
     BodyOutlines fast, exact;
     projectBodyParts(scene.camera, scene.pose, scene.shape, fast);
-    projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, exact);
+    projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, partAxes(scene.pose, scene.shape), exact);
     double worst_px = 0, worst_area = 0, worst_end_px = 0, height_px = 0;
     for (int p = 0; p < body::kNumBodyParts; ++p) {
       ASSERT_TRUE(fast[p].visible && exact[p].visible);
@@ -161,7 +206,7 @@ TEST(BodyProjection, PartsBehindTheCameraAreInvisible) {
   for (auto& foot : scene.pose.foot_centres) foot += shift;
   BodyOutlines outlines, exact;
   projectBodyParts(scene.camera, scene.pose, scene.shape, outlines);
-  projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, exact);
+  projectBodyPartsExactly(scene.camera, scene.pose, scene.shape, partAxes(scene.pose, scene.shape), exact);
   for (const BodyOutlines* o : {&outlines, &exact}) {
     EXPECT_FALSE((*o)[body::kTorsoPart].visible);
     EXPECT_EQ((*o)[body::kTorsoPart].size, 0);
