@@ -181,6 +181,8 @@ TrackerNodeConfig loadTrackerNodeConfig(const ros::NodeHandle& private_nh) {
   readTable(reader, core::tracking::trackerOptionTable(), config.tracker);
   readTable(reader, core::vision::likelihoodOptionTable(), config.likelihood);
   readTable(reader, core::tracking::sessionOptionTable(), config.session);
+  // A height given is everyone's; else each person's is measured (SessionOptions).
+  config.session.estimate_person_height = !private_nh.hasParam("person_height_m");
   RosInterfaceOptions& r = config.ros;
   readTable(reader, rosInterfaceOptionTable(), r);
   config.tracker.frame_budget_fraction = r.frame_budget_fraction;

@@ -83,7 +83,16 @@ TEST(ParameterFiles, TrackerYamlHoldsEveryTableOptionWithItsDefault) {
     const std::string text = option->second.flag ? value : numberText(std::stod(value));
     EXPECT_EQ(text, option->second.default_text) << "config/tracker.yaml: " << name << " is not the default";
   }
-  for (const auto& [name, option] : options) EXPECT_TRUE(seen.count(name)) << "config/tracker.yaml lacks " << name;
+  // Parameters whose absence means something (person_height_m: each person's measured) are
+  // there as a comment, `# name: value`.
+  const std::set<std::string> unset{"person_height_m"};
+  const std::string text = readText(std::string(KNEED_WALKER_SOURCE_DIR) + "/config/tracker.yaml");
+  for (const std::string& name : unset) {
+    EXPECT_FALSE(seen.count(name)) << "config/tracker.yaml sets " << name << ": unset means something";
+    EXPECT_NE(text.find("\n# " + name + ": "), std::string::npos) << "config/tracker.yaml lacks the comment # " << name << ":";
+  }
+  for (const auto& [name, option] : options)
+    EXPECT_TRUE(seen.count(name) || unset.count(name)) << "config/tracker.yaml lacks " << name;
   for (const std::string& name : others) EXPECT_TRUE(seen.count(name)) << "config/tracker.yaml lacks " << name;
 }
 

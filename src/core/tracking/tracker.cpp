@@ -369,11 +369,16 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   timing_ = TrackerTiming{};
   timing_.precompute_ms = msSince(precompute_at);
 
+  // The gaits in the guess's speed range; when it falls between the bank's speeds (which scale
+  // with the person's leg), those nearest it.
   std::vector<int> gaits;
+  auto outside_kmh = [&](int g) {
+    return std::max({0.0, guess.min_speed_kmh - bank_[g].speed_kmh, bank_[g].speed_kmh - guess.max_speed_kmh});
+  };
+  double nearest_kmh = std::numeric_limits<double>::infinity();
+  for (int g = 0; g < gaitCount(); ++g) nearest_kmh = std::min(nearest_kmh, outside_kmh(g));
   for (int g = 0; g < gaitCount(); ++g)
-    if (bank_[g].speed_kmh >= guess.min_speed_kmh && bank_[g].speed_kmh <= guess.max_speed_kmh) gaits.push_back(g);
-  if (gaits.empty())
-    for (int g = 0; g < gaitCount(); ++g) gaits.push_back(g);
+    if (outside_kmh(g) <= nearest_kmh + 1e-9) gaits.push_back(g);
   const auto particles_at = Clock::now();
   const FilterStepReport report = filter_->initialize(
       [&](common::Random& random) {

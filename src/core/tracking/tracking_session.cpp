@@ -171,13 +171,19 @@ std::vector<SessionAnswer> TrackingSession::flushHeld() {
 bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
                                  PersonAnswer& person, SessionAnswer& answer) {
   Slot& slot = slots_[s];
-  Tracker& tracker = slotTracker(s, guess.person_height_m);
-  // The person's ground track starts at the guess, the tracker's person height taken as given,
-  // and holds the particles from the first frame on.
-  auto ground = std::make_unique<person::GroundTracker>(tracker.camera(), tracker.ground(), options_.ground_track,
-                                                        tracker.keepsWholePath());
-  ground->start(guess.position_m, tracker.personHeightM(), stamp_s);
+  // The person's height: the guess's, else person_height_m when the user gave it, else the
+  // stature the person's ground track measures in this frame (rounded to 1 cm; the default
+  // when their head is not seen). The ground track starts at the guess and holds the particles
+  // from the first frame on; it goes on estimating a stature it was not given.
+  std::optional<double> height_m = guess.person_height_m;
+  if (!height_m && !options_.estimate_person_height) height_m = default_height_m_;
+  auto ground = std::make_unique<person::GroundTracker>(tracker().camera(), tracker().ground(), options_.ground_track,
+                                                        tracker().keepsWholePath());
+  ground->start(guess.position_m, height_m, stamp_s);
   const person::GroundTrackEstimate ground_estimate = ground->update(bgr, background_, stamp_s);
+  const bool estimated = !height_m && ground_estimate.head_used;
+  if (estimated) height_m = std::clamp(std::round(100 * ground_estimate.stature()) / 100, kMinPersonHeightM, kMaxPersonHeightM);
+  Tracker& tracker = slotTracker(s, height_m);
   TrackEstimate estimate;
   try {
     estimate = tracker.start(bgr, stamp_s, guess, &ground_estimate);
@@ -196,9 +202,10 @@ bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int 
   person.ground_track = ground_estimate;
   person.started = true;
   char text[160];
-  std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s", guess.position_m.x(),
+  std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s, %.2f m tall%s", guess.position_m.x(),
                 guess.position_m.y(),
-                guess.heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess.heading_rad) + " rad").c_str());
+                guess.heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess.heading_rad) + " rad").c_str(),
+                tracker.personHeightM(), estimated ? " (measured)" : "");
   person.message = text;
   collectMapFrames(slot, person);
   person.estimate = estimate;
@@ -308,6 +315,7 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
         if (nearest == found.end()) continue;
         slots_[s].reacquire = foundPersonGuess(nearest->ground_xy_m, lost.heading_rad, 0.6);
         slots_[s].reacquire->same_person = true;
+        slots_[s].reacquire->person_height_m = slots_[s].tracker->personHeightM();
         found.erase(nearest);
         char text[96];
         std::snprintf(text, sizeof text, "; someone is %.2f m away: starting again there at the next frame", best);

@@ -155,7 +155,7 @@ constexpr RenamedOption kRenamedOptions[] = {
 // Options removed then, each with what to give instead.
 constexpr std::pair<const char*, const char*> kRemovedOptions[] = {
     {"--ess-threshold", "give --resample-ess-fraction, the threshold as a fraction of --num-particles"},
-    {"--estimate-height", "give the person's height with --person-height-m"},
+    {"--estimate-height", "each person's height is measured unless --person-height-m gives it"},
     {"--hill-gaits", "the particles walk the nearest slope's gaits and those between it and the level"},
     {"--contact-weight", "the ground contact term was removed"},
 };
@@ -227,6 +227,8 @@ std::optional<Options> parseOptions(int argc, char** argv, int& exit_code) {
     exit_code = app.exit(e);
     return std::nullopt;
   }
+  // A height given is everyone's; else each person's is measured (SessionOptions).
+  options.session.estimate_person_height = app.count("--person-height-m") == 0;
   options.output.estimate = filtered ? WrittenEstimate::kFiltered
                             : lagged ? WrittenEstimate::kLagged
                                      : WrittenEstimate::kMapSequence;

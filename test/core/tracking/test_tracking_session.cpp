@@ -45,9 +45,12 @@ std::vector<MapFrame> mapFramesOf(const std::vector<PersonAnswer>& people) {
   return frames;
 }
 
+// Holding `frames` to learn the background from; the person's height the tracker's (the
+// rendered person's, 1.75 m), not measured.
 SessionOptions holding(int frames) {
   SessionOptions options;
   options.background_frames = frames;
+  options.estimate_person_height = false;
   return options;
 }
 
@@ -219,6 +222,39 @@ TEST(TrackingSession, ATrackCarriesItsPersonsGroundTrack) {
   std::sort(errors.begin(), errors.end());
   std::cout << "ground track, smoothed: median waist error " << 1e3 * errors[errors.size() / 2] << " mm\n";
   EXPECT_LT(errors[errors.size() / 2], 0.15);  // measured 83 mm
+}
+
+// Without a height given, a track's person height is the stature their ground track measures at
+// its first frame; given (estimate_person_height false), person_height_m. The options' default
+// here (1.50 m) is not the rendered person's (1.75 m).
+TEST(TrackingSession, APersonsHeightIsMeasuredUnlessGiven) {
+  const test::RenderedWalk& s = scene();
+  TrackerOptions options;
+  options.filter.num_particles = 200;
+  options.person_height_m = 1.50;
+  const TrackerFactory factory = trackerFactory(
+      s.camera, s.walk.ground, gait::loadGaitTable(test::configFile("prior_gait_table.yaml"), test::shippedWalkerModel()),
+      prior::loadPriorOptions(test::configFile("prior.yaml")), options);
+  for (const bool estimate : {true, false}) {
+    SessionOptions session_options = holding(10);
+    session_options.estimate_person_height = estimate;
+    TrackingSession session(factory, session_options);
+    session.startFromBox(truthBox());
+    std::string started;
+    for (size_t f = 0; f < 12 && started.empty(); ++f)
+      for (const SessionAnswer& a : session.feed(s.frames[f], 0.1 * f))
+        if (const PersonAnswer* person = a.person(1); person && person->started && started.empty()) started = person->message;
+    ASSERT_FALSE(started.empty()) << "no track started";
+    const double height_m = session.tracker(1).personHeightM();
+    std::cout << (estimate ? "measured: " : "given: ") << started << "\n";
+    if (estimate) {
+      EXPECT_NEAR(height_m, 1.75, 0.05) << started;
+      EXPECT_NE(started.find("(measured)"), std::string::npos) << started;
+    } else {
+      EXPECT_EQ(height_m, 1.50) << started;
+      EXPECT_EQ(started.find("(measured)"), std::string::npos) << started;
+    }
+  }
 }
 
 // A box around no person cannot start a track: the frame is answered (waiting, saying why),

@@ -14,12 +14,15 @@
 
 namespace kneed_walker::core::tracking {
 
+// The heights of people the tracker's body model is made for, m.
+constexpr double kMinPersonHeightM = 1.0, kMaxPersonHeightM = 2.3;
+
 struct TrackerOptions {
   // The particle filter (paper §4, "Inference"), run once per track.
   FilterOptions filter;
 
   // Person and scene priors (paper §5: "initial state specified coarsely").
-  double person_height_m = 1.75;  // standing height H
+  double person_height_m = 1.75;  // standing height H, [kMinPersonHeightM, kMaxPersonHeightM]
   double person_mass_kg = 70.0;   // body mass M
   double ground_slope_rad = 0.0;  // γ, positive uphill
   // On a hill the particles walk the gaits of the table's slope nearest the ground's that has

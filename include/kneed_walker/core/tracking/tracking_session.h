@@ -54,6 +54,10 @@ struct SessionOptions {
   double reacquire_distance_m = 1.0;
   vision::PersonDetectorOptions detector;
   person::GroundTrackOptions ground_track;  // each track's person's ground track
+  // Each track's person height from the stature their ground track measures at its first frame
+  // (TrackerOptions::person_height_m when their head is not seen); false: person_height_m for
+  // everyone. The tools set it false when the user gives person_height_m.
+  bool estimate_person_height = true;
 };
 
 // Makes the tracker of a body slot (1..max_people). The trackers of a session differ only in
