@@ -3,6 +3,7 @@
 #include <sensor_msgs/distortion_models.h>
 #include <sensor_msgs/image_encodings.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -359,6 +360,65 @@ visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& e
     }
   }
   markers.markers = {bones, joints, parts};
+  return markers;
+}
+
+GroundTrack toGroundTrack(const core::person::GroundTrackEstimate& track, const std_msgs::Header& header,
+                          const std::string& body_id, double ground_height_m) {
+  GroundTrack message;
+  message.header = header;
+  message.body_id = body_id;
+  message.measured = track.measured;
+  message.position.x = track.mean(core::person::kX);
+  message.position.y = track.mean(core::person::kY);
+  message.position.z = ground_height_m;
+  message.velocity.x = track.mean(core::person::kVx);
+  message.velocity.y = track.mean(core::person::kVy);
+  message.stature = track.stature();
+  for (int r = 0; r < core::person::kGroundTrackDims; ++r)
+    for (int c = 0; c < core::person::kGroundTrackDims; ++c)
+      message.covariance[core::person::kGroundTrackDims * r + c] = track.covariance(r, c);
+  return message;
+}
+
+visualization_msgs::MarkerArray toGroundTrackMarkers(const GroundTrack& track, double lifetime_s) {
+  visualization_msgs::Marker spread;
+  spread.header = track.header;
+  spread.ns = "ground_track_" + track.body_id;
+  spread.id = 0;
+  spread.type = visualization_msgs::Marker::CYLINDER;
+  spread.action = visualization_msgs::Marker::ADD;
+  spread.lifetime = ros::Duration(lifetime_s);
+  // The position's 2-sd ellipse: the cylinder's x and y along the covariance's principal axes.
+  Eigen::Matrix2d position_covariance;
+  position_covariance << track.covariance[0], track.covariance[1], track.covariance[5], track.covariance[6];
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(position_covariance);
+  const Eigen::Vector2d major = axes.eigenvectors().col(1);
+  spread.pose.position = track.position;
+  spread.pose.orientation = yawQuaternion(std::atan2(major.y(), major.x()));
+  spread.scale.x = std::max(0.02, 4 * std::sqrt(std::max(0.0, axes.eigenvalues()(1))));  // diameters, m
+  spread.scale.y = std::max(0.02, 4 * std::sqrt(std::max(0.0, axes.eigenvalues()(0))));
+  spread.scale.z = 0.01;
+  spread.color.r = 1.0f, spread.color.g = 0.8f, spread.color.b = 0.1f, spread.color.a = track.measured ? 0.6f : 0.3f;
+  visualization_msgs::Marker velocity = spread;
+  velocity.id = 1;
+  velocity.type = visualization_msgs::Marker::ARROW;
+  velocity.pose = geometry_msgs::Pose();
+  velocity.pose.orientation.w = 1;
+  velocity.scale.x = 0.04, velocity.scale.y = 0.08, velocity.scale.z = 0.1;  // shaft, head diameters and head length, m
+  geometry_msgs::Point ahead = track.position;
+  ahead.x += track.velocity.x;
+  ahead.y += track.velocity.y;
+  velocity.points = {track.position, ahead};
+  visualization_msgs::Marker stature = velocity;
+  stature.id = 2;
+  stature.type = visualization_msgs::Marker::LINE_LIST;
+  stature.scale.x = 0.02;  // line width, m
+  geometry_msgs::Point top = track.position;
+  top.z += track.stature;
+  stature.points = {track.position, top};
+  visualization_msgs::MarkerArray markers;
+  markers.markers = {spread, velocity, stature};
   return markers;
 }
 

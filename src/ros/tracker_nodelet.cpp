@@ -16,7 +16,9 @@
 //          /tf (body_<id> and REP 155 joint frames); per frame: ~body_poses
 //          (kneed_walker/BodyPoseArray, every person), ~status (kneed_walker/TrackingStatus,
 //          latched), ~particle_cloud (geometry_msgs/PoseArray, every person's, throttled),
-//          ~overlay (sensor_msgs/Image), /diagnostics. All stamped with the image's time.
+//          ~overlay (sensor_msgs/Image), /diagnostics, ~ground_tracks
+//          (kneed_walker/GroundTrackArray: where each person stands and goes on the floor, with
+//          its covariance; drawn in ~markers). All stamped with the image's time.
 //          ~body_poses_smoothed (kneed_walker/BodyPoseArray): the MAP poses of frame t − Δs
 //          (paper §4's fixed-lag smoother: the best particle's ancestry, kept to one lineage
 //          while it weighs nearly as much, resample_lag_frames behind) as each becomes final,
@@ -56,6 +58,7 @@
 #include <thread>
 
 #include "kneed_walker/BodyPoseArray.h"
+#include "kneed_walker/GroundTrackArray.h"
 #include "kneed_walker/TrackerConfig.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "kneed_walker/core/prior/walker_prior.h"
@@ -110,7 +113,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   ros::Subscriber init_box_subscriber_;
   image_transport::Publisher overlay_publisher_;
   ros::Publisher body_pose_publisher_, body_poses_publisher_, smoothed_poses_publisher_, pose_publisher_, walker_state_publisher_,
-      status_publisher_, particle_cloud_publisher_, markers_publisher_;
+      status_publisher_, particle_cloud_publisher_, markers_publisher_, ground_tracks_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -201,6 +204,7 @@ void TrackerNodelet::onInit() {
   body_pose_publisher_ = private_nh.advertise<BodyPose>("body_pose", person_queue);
   body_poses_publisher_ = private_nh.advertise<BodyPoseArray>("body_poses", queue);
   smoothed_poses_publisher_ = private_nh.advertise<BodyPoseArray>("body_poses_smoothed", queue);
+  ground_tracks_publisher_ = private_nh.advertise<GroundTrackArray>("ground_tracks", queue);
   pose_publisher_ = private_nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", person_queue);
   walker_state_publisher_ = private_nh.advertise<WalkerState>("walker_state", person_queue);
   status_publisher_ = private_nh.advertise<TrackingStatus>("status", queue, /*latch=*/true);
@@ -509,6 +513,8 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
       NODELET_INFO("frame at %.3f s: body %d: %s", header.stamp.toSec(), person.body, person.message.c_str());
   auto poses = boost::make_shared<BodyPoseArray>();
   poses->header = header;
+  auto ground_tracks = boost::make_shared<GroundTrackArray>();
+  ground_tracks->header = header;
   cv_bridge::CvImagePtr picture;
   if (publishing_.publish_overlay && overlay_publisher_.getNumSubscribers() > 0) picture = cv_bridge::toCvCopy(image, "bgr8");
   geometry_msgs::PoseArray cloud;
@@ -535,6 +541,12 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     markers_publisher_.publish(
         boost::make_shared<visualization_msgs::MarkerArray>(toMarkers(estimate, header, id, 1.0, tracker.shape())));
     if (publishing_.publish_tf) tf_broadcaster_->sendTransform(toTransforms(estimate, header, id));
+    if (person.ground_track) {
+      const Eigen::Vector2d position = person.ground_track->position();
+      ground_tracks->people.push_back(toGroundTrack(*person.ground_track, header, id, tracker.ground().height(position)));
+      markers_publisher_.publish(boost::make_shared<visualization_msgs::MarkerArray>(
+          toGroundTrackMarkers(ground_tracks->people.back(), 1.0)));
+    }
     if (send_cloud && tracker.started()) {
       const geometry_msgs::PoseArray own = toParticleCloud(tracker.particles(), header);
       cloud.header = own.header;
@@ -547,6 +559,7 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     }
   }
   body_poses_publisher_.publish(poses);
+  ground_tracks_publisher_.publish(ground_tracks);
   publishSmoothed(answer);
   if (!cloud.poses.empty()) {
     last_cloud_ = now;

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 #include <sensor_msgs/image_encodings.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <tuple>
@@ -228,6 +230,55 @@ TEST(TransformConversion, APoseGivesSuffixedFramesAtItsJoints) {
     const Eigen::Vector3d world = waist + Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) * offset;
     EXPECT_NEAR((world - pose.joints[j]).norm(), 0.0, 1e-12) << t.child_frame_id;
   }
+}
+
+// The ground track's message carries its state and full covariance in the world frame, and its
+// markers draw the position's 2-sd ellipse along the covariance's long axis.
+TEST(GroundTrackConversion, CarriesTheStateAndCovarianceAndDrawsTheSpread) {
+  core::person::GroundTrackEstimate track;
+  track.mean << 1.5, 6.0, -1.2, 0.4, 1.72;
+  track.measured = true;
+  Eigen::Matrix<double, 5, 5> a = Eigen::Matrix<double, 5, 5>::Identity();
+  a(0, 1) = 0.3, a(2, 3) = -0.2, a(4, 0) = 0.1;
+  track.covariance = 0.01 * a * a.transpose();
+  track.covariance(1, 1) += 0.08;  // long along y, the line of sight
+  std_msgs::Header header;
+  header.frame_id = "world";
+  header.stamp = ros::Time(7.25);
+  const GroundTrack message = toGroundTrack(track, header, "2", 0.05);
+  EXPECT_EQ(message.header.frame_id, "world");
+  EXPECT_EQ(message.header.stamp, header.stamp);
+  EXPECT_EQ(message.body_id, "2");
+  EXPECT_TRUE(message.measured);
+  EXPECT_DOUBLE_EQ(message.position.x, 1.5);
+  EXPECT_DOUBLE_EQ(message.position.y, 6.0);
+  EXPECT_DOUBLE_EQ(message.position.z, 0.05);
+  EXPECT_DOUBLE_EQ(message.velocity.x, -1.2);
+  EXPECT_DOUBLE_EQ(message.velocity.y, 0.4);
+  EXPECT_DOUBLE_EQ(message.velocity.z, 0.0);
+  EXPECT_DOUBLE_EQ(message.stature, 1.72);
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) EXPECT_DOUBLE_EQ(message.covariance[5 * r + c], track.covariance(r, c)) << r << "," << c;
+
+  const visualization_msgs::MarkerArray markers = toGroundTrackMarkers(message, 1.0);
+  ASSERT_EQ(markers.markers.size(), 3u);
+  const visualization_msgs::Marker& spread = markers.markers[0];
+  EXPECT_EQ(spread.ns, "ground_track_2");
+  EXPECT_EQ(spread.header.frame_id, "world");
+  Eigen::Matrix2d position_covariance = track.covariance.topLeftCorner<2, 2>();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(position_covariance);
+  EXPECT_NEAR(spread.scale.x, 4 * std::sqrt(axes.eigenvalues()(1)), 1e-9);
+  EXPECT_NEAR(spread.scale.y, 4 * std::sqrt(axes.eigenvalues()(0)), 1e-9);
+  // The cylinder's x axis (its yaw) along the long axis, which is nearly the line of sight (y).
+  const double yaw = 2 * std::atan2(spread.pose.orientation.z, spread.pose.orientation.w);
+  EXPECT_GT(std::abs(std::sin(yaw)), 0.95);
+  const visualization_msgs::Marker& velocity = markers.markers[1];
+  ASSERT_EQ(velocity.points.size(), 2u);
+  EXPECT_NEAR(velocity.points[1].x - velocity.points[0].x, -1.2, 1e-12);
+  EXPECT_NEAR(velocity.points[1].y - velocity.points[0].y, 0.4, 1e-12);
+  const visualization_msgs::Marker& stature = markers.markers[2];
+  ASSERT_EQ(stature.points.size(), 2u);
+  EXPECT_NEAR(stature.points[1].z - stature.points[0].z, 1.72, 1e-12);
 }
 
 }  // namespace

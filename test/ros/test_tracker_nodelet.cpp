@@ -56,6 +56,7 @@ TEST(TrackerNodelet, AdvertisesItsOutputs) {
       {"/kneed_walker/status", "kneed_walker/TrackingStatus"},
       {"/kneed_walker/particle_cloud", "geometry_msgs/PoseArray"},
       {"/kneed_walker/markers", "visualization_msgs/MarkerArray"},
+      {"/kneed_walker/ground_tracks", "kneed_walker/GroundTrackArray"},
       {"/tf", "tf2_msgs/TFMessage"},
       {"/diagnostics", "diagnostic_msgs/DiagnosticArray"},
   };

@@ -26,6 +26,7 @@
 
 #include "kneed_walker/BodyPose.h"
 #include "kneed_walker/BodyPoseArray.h"
+#include "kneed_walker/GroundTrackArray.h"
 #include "kneed_walker/core/vision/camera.h"
 #include "kneed_walker/TrackingStatus.h"
 #include "joints_csv.h"
@@ -68,6 +69,9 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   std::map<ros::Time, BodyPoseArray> smoothed;
   ros::Subscriber smoothed_sub = nh.subscribe<BodyPoseArray>(
       "/kneed_walker/body_poses_smoothed", 100, [&](const BodyPoseArrayConstPtr& a) { smoothed[a->header.stamp] = *a; });
+  std::map<ros::Time, GroundTrackArray> ground_tracks;
+  ros::Subscriber ground_sub = nh.subscribe<GroundTrackArray>(
+      "/kneed_walker/ground_tracks", 100, [&](const GroundTrackArrayConstPtr& a) { ground_tracks[a->header.stamp] = *a; });
   ros::Subscriber status_sub = nh.subscribe<TrackingStatus>("/kneed_walker/status", 100, [&](const TrackingStatusConstPtr& s) {
     statuses[s->header.stamp] = *s;
     last = *s;
@@ -183,8 +187,8 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
   const std::vector<JointRow> truth = readJoints(sequence + "_ground_truth.csv");
   std::map<int, std::map<std::string, const JointRow*>> truth_by_frame;
   for (const JointRow& row : truth) truth_by_frame[row.frame][row.joint] = &row;
-  double worst_difference_m = 0, error_sum_m = 0;
-  int compared = 0, error_count = 0;
+  double worst_difference_m = 0, error_sum_m = 0, ground_error_sum_m = 0;
+  int compared = 0, error_count = 0, ground_count = 0;
   for (size_t f = 0; f < images.size(); ++f) {
     const auto pose = poses.find(images[f]->header.stamp);
     ASSERT_EQ(pose != poses.end(), offline_by_frame.count(static_cast<int>(f)) > 0)
@@ -197,6 +201,20 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
     ASSERT_EQ(array->second.bodies.size(), 1u) << "frame " << f;
     EXPECT_EQ(array->second.bodies[0].body_id, "1");
     EXPECT_EQ(array->second.bodies[0].joint_positions, pose->second.joint_positions) << "frame " << f;
+    // ~ground_tracks: the same body's ground track, in the world frame, near the true waist's
+    // ground point, with a positive covariance.
+    const auto ground = ground_tracks.find(images[f]->header.stamp);
+    ASSERT_NE(ground, ground_tracks.end()) << "frame " << f << ": a ~body_pose without a ~ground_tracks";
+    ASSERT_EQ(ground->second.people.size(), 1u) << "frame " << f;
+    const GroundTrack& track = ground->second.people[0];
+    EXPECT_EQ(track.body_id, "1");
+    EXPECT_EQ(track.header.frame_id, pose->second.header.frame_id);
+    for (int d = 0; d < 5; ++d) EXPECT_GT(track.covariance[6 * d], 0.0) << "frame " << f;
+    if (truth_by_frame[f].count("waist")) {
+      const JointRow* waist = truth_by_frame[f].at("waist");
+      ground_error_sum_m += std::hypot(track.position.x - waist->x, track.position.y - waist->y);
+      ++ground_count;
+    }
     // Tracks running after the frame: none at the frame where the track is lost.
     const TrackingStatus& status = statuses[images[f]->header.stamp];
     EXPECT_EQ(status.people_tracked, status.state == TrackingStatus::TRACKING ? 1u : 0u) << "frame " << f;
@@ -219,6 +237,11 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
               "mean joint error %.1f mm\n", images.size(), poses.size(), worst_difference_m, compared, mean_error_mm);
   EXPECT_LE(worst_difference_m, 1e-9);
   EXPECT_LT(mean_error_mm, 350.0);  // test/ros/check_tracking's loose bound
+  ASSERT_GT(ground_count, 0);
+  const double ground_error_mm = 1000 * ground_error_sum_m / ground_count;
+  std::printf("ground track: mean distance from the true waist's ground point %.1f mm over %d frames\n", ground_error_mm,
+              ground_count);
+  EXPECT_LT(ground_error_mm, 300.0);
 
   // The smoothed poses (the MAP at t − Δs as each becomes final): each frame
   // ~body_poses_smoothed gave is track_offline --lagged's for the same frames and seed; it gave

@@ -16,7 +16,9 @@
 #include <vector>
 
 #include "kneed_walker/BodyPose.h"
+#include "kneed_walker/GroundTrack.h"
 #include "kneed_walker/WalkerState.h"
+#include "kneed_walker/core/person/ground_track.h"
 #include "kneed_walker/core/tracking/tracker.h"
 
 #include "kneed_walker/core/vision/camera.h"
@@ -82,6 +84,14 @@ constexpr int kPartMeshSides = 12;
 visualization_msgs::MarkerArray toMarkers(const core::tracking::TrackEstimate& estimate, const std_msgs::Header& header,
                                           const std::string& body_id, double lifetime_s,
                                           const core::body::BodyShape& shape);
+// A person's ground track at one frame (person/ground_track.h): position on the ground (z the
+// ground's height there), velocity, stature and their 5x5 covariance.
+GroundTrack toGroundTrack(const core::person::GroundTrackEstimate& track, const std_msgs::Header& header,
+                          const std::string& body_id, double ground_height_m);
+// The ground track in rviz: the position's 2-sd ellipse on the ground (a flat cylinder, its axes
+// the covariance's), an arrow of the velocity (one second ahead) and a line of the stature;
+// namespace "ground_track_<id>", expiring after `lifetime_s`.
+visualization_msgs::MarkerArray toGroundTrackMarkers(const GroundTrack& track, double lifetime_s);
 // Each particle's mid-hip, facing its walking direction.
 geometry_msgs::PoseArray toParticleCloud(const std::vector<core::tracking::TrackerParticle>& particles,
                                          const std_msgs::Header& header);
