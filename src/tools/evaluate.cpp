@@ -14,7 +14,8 @@
 //                            sideways errors told apart (from a low camera depth is the weak one)
 //   footskate_mm=            mean slip of the estimated stance foot along the ground between
 //                            adjacent frames: the walker's rolling foot, recovered from knee and
-//                            ankle (body::rollingFoot), moves by −R·Δφ as it rolls; what it moves
+//                            ankle (body::rollingFoot; sized by the estimate's own thighs, the
+//                            truth's by --height), moves by −R·Δφ as it rolls; what it moves
 //                            beyond that is slip. The stance foot of a pair of frames is the foot
 //                            on the ground in both (its sole within --contact-mm) that slips least
 //                            (near a heel strike both feet are near the ground and the lower one
@@ -70,6 +71,19 @@ using kneed_walker::tools::FiniteRange;
 namespace {
 
 using Pose = std::map<std::string, Eigen::Vector3d>;
+
+// The height of the body model whose thighs (hip to knee) the poses have: the median over frames
+// and legs of the thigh's length over its share of the height. nullopt without a thigh.
+std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const kw::dynamics::BodyProportions& p) {
+  std::vector<double> heights;
+  for (const auto& [frame, pose] : poses)
+    for (const auto& [hip, knee] : {std::pair{"l_hip", "l_knee"}, std::pair{"r_hip", "r_knee"}})
+      if (pose.count(hip) && pose.count(knee))
+        heights.push_back((pose.at(hip) - pose.at(knee)).norm() / (p.thigh.length * p.leg_length_per_height));
+  if (heights.empty()) return std::nullopt;
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  return heights[heights.size() / 2];
+}
 
 // The poses of one body: `body` (empty: the file's only one).
 std::map<int, Pose> readPoses(const std::string& path, const std::string& body) {
@@ -230,7 +244,7 @@ int main(int argc, char** argv) {
       ->check(FiniteRange(1e-3, 1e6));
   app.add_option("--contact-mm", contact_mm, "a sole within this of the ground is on it")
       ->capture_default_str()->check(FiniteRange(1e-3, 1e3));
-  app.add_option("--height", height_m, "the person's height, m (sizes the rolling feet)")->capture_default_str()
+  app.add_option("--height", height_m, "the person's height, m (sizes the truth's rolling feet; the estimate's are its body's)")->capture_default_str()
       ->check(FiniteRange(1.0, 2.3));
   app.add_option("--walker-model", walker_model, "body proportions (the feet's radius and offset)")
       ->capture_default_str()->check(CLI::ExistingFile);
@@ -284,16 +298,20 @@ int main(int argc, char** argv) {
         ++sight_frames;
       }
     }
-    // Foot skate and penetration, of the estimate and (for reference) of the truth.
-    const kw::body::FootGeometry foot =
-        kw::body::FootGeometry::of(kw::dynamics::loadBodyProportions(walker_model), height_m);
+    // Foot skate and penetration, of the estimate and (for reference) of the truth. The truth's
+    // rolling feet are sized by --height; the estimate's by its own body (the tracker's height,
+    // which it measures when none is given), read from its thighs.
+    const kw::dynamics::BodyProportions proportions = kw::dynamics::loadBodyProportions(walker_model);
+    const kw::body::FootGeometry true_foot = kw::body::FootGeometry::of(proportions, height_m);
+    const kw::body::FootGeometry estimated_foot =
+        kw::body::FootGeometry::of(proportions, heightFromThighs(estimate, proportions).value_or(height_m));
     const Eigen::Vector3d up = ground.normal();
     // Each figure is empty when nothing could be measured (printed as n/a, never as 0).
     struct Contact {
       std::optional<double> skate_mm, penetration_mm, lean_deg, knee_at_contact_deg;
       int landings = 0;
     };
-    auto contact = [&](const std::map<int, Pose>& poses) {
+    auto contact = [&](const std::map<int, Pose>& poses, const kw::body::FootGeometry& foot) {
       double skate = 0, penetration = 0, lean = 0, knee_at_contact = 0;
       int skate_count = 0, penetration_count = 0, lean_count = 0, landings = 0;
       struct Feet {
@@ -353,7 +371,7 @@ int main(int argc, char** argv) {
       return Contact{mean(skate, skate_count, 1000), mean(penetration, penetration_count, 1000),
                      mean(lean, lean_count, kDeg), mean(knee_at_contact, landings, kDeg), landings};
     };
-    const Contact estimated = contact(estimate), true_contact = contact(truth);
+    const Contact estimated = contact(estimate, estimated_foot), true_contact = contact(truth, true_foot);
     std::printf("frames=%d joints=%d\n", frames, count / frames);
     std::printf("estimated_frames=%d/%zu\n", frames, truth.size());
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);
