@@ -82,7 +82,8 @@ std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const k
         heights.push_back((pose.at(hip) - pose.at(knee)).norm() / (p.thigh.length * p.leg_length_per_height));
   if (heights.empty()) return std::nullopt;
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
-  return heights[heights.size() / 2];
+  const double height_m = heights[heights.size() / 2];
+  return std::isfinite(height_m) && height_m > 0 ? std::optional<double>(height_m) : std::nullopt;
 }
 
 // The poses of one body: `body` (empty: the file's only one).

@@ -82,8 +82,8 @@ struct BodyPose {
   Eigen::Vector3d forward;  // unit walking direction along the ground
   Eigen::Vector3d up;       // unit ground normal
   Eigen::Vector3d left;     // unit lateral direction, up × forward
-  // A point of the ground the stance foot rolls on (the plane through it square to `up`):
-  // the drawn feet stand on it (vision::partAxes), not in it.
+  // A point of the ground the stance foot rolls on (the plane through it square to `up`): the
+  // synthetic sequences draw the feet standing on it (vision::standFeetOnGround).
   Eigen::Vector3d ground_point_m = Eigen::Vector3d::Zero();
 };
 

@@ -24,8 +24,8 @@ PartAxes partAxes(const body::BodyPose& pose, const body::BodyShape& shape);
 // The feet lifted onto the ground (BodyPose::ground_point_m) where they reach below it, as a
 // person's stand on the floor: the synthetic sequences draw them so. The walker's foot rolls on
 // an arc and partAxes keeps the drawn foot rigid with the shank, so at contact its heel or toe
-// reaches up to 4 cm into the ground; the likelihood keeps that shape (lifted, the tracking of
-// the captured walks was worse in 30 of their 45 runs).
+// reaches up to 4 cm into the ground; the likelihood keeps that shape (it tracks the captured
+// walks better).
 void standFeetOnGround(const body::BodyPose& pose, const body::BodyShape& shape, PartAxes& axes);
 
 // A part's unit axes: along it (proximal to distal), across the body (BodyPose::left made square
