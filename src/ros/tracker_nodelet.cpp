@@ -474,10 +474,12 @@ void TrackerNodelet::process(const Frame& frame) {
     last_processing_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   }
   if (answers.empty()) {
+    const bool learning = session_->state() == kw::tracking::SessionState::kLearningBackground;
     publishStatus(header, TrackingStatus::WAITING,
                   std::string(kw::tracking::stateName(session_->state())) + " (" +
-                      std::to_string(session_->framesFed()) + "/" + std::to_string(config_.session.background_frames) +
-                      " frames)",
+                      (learning ? std::to_string(session_->framesFed()) + "/" +
+                                      std::to_string(config_.session.background_frames) + " frames)"
+                                : std::to_string(session_->framesHeld()) + " frames held)"),
                   nullptr);
     return;
   }

@@ -7,6 +7,8 @@
 //   estimated_frames=N/M     the truth's frames that the estimate has (the figures are over them)
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150), and the
 //                            truth's frames the estimate does not have
+//   heading_error_1s_deg=    the walking direction's error 1 s after the estimate's first frame
+//                            (each the waist's over ±0.5 s; over 90°: started mirrored)
 //   depth_bias_mm=           with --ground (the calibration: the camera's position), the mean
 //                            signed error of the waist's distance to the camera (positive: the
 //                            body placed too far), and lateral_error_mm= the mean error of the
@@ -86,8 +88,8 @@ std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const k
   return std::isfinite(height_m) && height_m > 0 ? std::optional<double>(height_m) : std::nullopt;
 }
 
-// The poses of one body: `body` (empty: the file's only one).
-std::map<int, Pose> readPoses(const std::string& path, const std::string& body) {
+// The poses of one body: `body` (empty: the file's only one); each frame's stamp into `stamps`.
+std::map<int, Pose> readPoses(const std::string& path, const std::string& body, std::map<int, double>* stamps = nullptr) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot read");
   std::string line;
@@ -111,6 +113,7 @@ std::map<int, Pose> readPoses(const std::string& path, const std::string& body) 
     try {
       p = Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z));
       frame_number = std::stoi(frame);
+      if (stamps) (*stamps)[frame_number] = std::stod(stamp);
       if (!p.allFinite()) throw std::invalid_argument("not finite");
     } catch (const std::exception&) {
       throw std::runtime_error(path + ":" + std::to_string(number) + ": not numbers: " + line);
@@ -251,7 +254,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto truth = readPoses(truth_path, ""), estimate = readPoses(estimate_path, body);
+    std::map<int, double> truth_stamps;
+    const auto truth = readPoses(truth_path, "", &truth_stamps), estimate = readPoses(estimate_path, body);
     const kw::vision::GroundPlane ground = ground_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(ground_path);
     std::map<std::string, std::pair<double, int>> per_joint;
     double sum = 0, root_sum = 0;
@@ -381,6 +385,35 @@ int main(int argc, char** argv) {
     if (sight_frames > 0)
       std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\n", 1000 * depth_sum / sight_frames,
                   1000 * lateral_sum / sight_frames);
+    // The estimate's walking direction 1 s after its first frame against the truth's, each its
+    // waist's over ±0.5 s: over 90° is a track that started on the mirrored heading.
+    {
+      std::vector<double> intervals;
+      for (auto it = truth_stamps.begin(); it != truth_stamps.end() && std::next(it) != truth_stamps.end(); ++it)
+        intervals.push_back((std::next(it)->second - it->second) / (std::next(it)->first - it->first));
+      const double dt = intervals.empty() ? 0 : kneed_walker::tools::median(intervals);
+      const auto direction = [&](const std::map<int, Pose>& poses, int frame, int half) -> std::optional<double> {
+        const auto before = poses.find(frame - half), after = poses.find(frame + half);
+        if (before == poses.end() || after == poses.end() || !before->second.count("waist") ||
+            !after->second.count("waist"))
+          return std::nullopt;
+        const Eigen::Vector3d walked = after->second.at("waist") - before->second.at("waist");
+        if (walked.head<2>().norm() < 1e-3) return std::nullopt;
+        return std::atan2(walked.y(), walked.x());
+      };
+      std::optional<double> error_deg;
+      if (dt > 0) {
+        const int half = std::max(1, static_cast<int>(std::lround(0.5 / dt)));
+        const int at = estimate.begin()->first + static_cast<int>(std::lround(1.0 / dt));
+        const auto estimated = direction(estimate, at, half), true_direction = direction(truth, at, half);
+        if (estimated && true_direction)
+          error_deg = std::abs(std::remainder(*estimated - *true_direction, 2 * M_PI)) * 180 / M_PI;
+      }
+      if (error_deg)
+        std::printf("heading_error_1s_deg=%.1f\n", *error_deg);
+      else
+        std::printf("heading_error_1s_deg=n/a (the estimate or the truth is shorter, or did not move)\n");
+    }
     // A figure, or n/a and why.
     auto figure = [](const char* name, const std::optional<double>& value, const char* why) {
       if (value)

@@ -350,6 +350,11 @@ void GroundTracker::correct(const std::optional<SilhouetteMeasurement>& measurem
   history_.back().filtered = state_;
 }
 
+void GroundTracker::keepHistory(bool keep) {
+  keep_history_ = keep;
+  if (!keep && history_.size() > 1) history_.erase(history_.begin(), history_.end() - 1);
+}
+
 const GroundTrackEstimate& GroundTracker::update(const cv::Mat& bgr, const vision::BackgroundModel& background,
                                                  double stamp_s) {
   predict(stamp_s);

@@ -1,5 +1,7 @@
 #include "kneed_walker/core/tracking/tracker.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -40,6 +42,7 @@ InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlan
   InitialGuess guess;
   guess.position_m = point->head<2>();
   guess.heading_sd_rad = M_PI;
+  guess.from_ground_track = true;
   return guess;
 }
 
@@ -328,6 +331,9 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   if (background_.empty()) throw std::logic_error("Tracker::start needs a background model (setBackground)");
   if (bgr.type() != CV_8UC3 || bgr.cols != camera_.width() || bgr.rows != camera_.height())
     throw std::invalid_argument("the frame is not a BGR 8-bit image of the camera's size");
+  if (guess.position_covariance_m2 && !(guess.position_covariance_m2->allFinite() &&
+                                         guess.position_covariance_m2->llt().info() == Eigen::Success))
+    throw std::invalid_argument("the guess's position covariance is not positive definite");
   const auto started_at = Clock::now();
   if (!guess.same_person || appearance_.empty()) learnAppearance(bgr, guess);
   filter_ = std::make_unique<ParticleFilter<TrackerParticle>>(options_.filter);
@@ -343,7 +349,14 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
   cv::cvtColor(bgr, previous_grey_, cv::COLOR_BGR2GRAY);
 
   // The region the guess can reach: its spread around the position, the person's height up.
-  const double reach = 2.5 * guess.position_sd_m + 1.0;
+  const Eigen::Matrix2d position_factor =
+      guess.position_covariance_m2 ? Eigen::Matrix2d(guess.position_covariance_m2->llt().matrixL())
+                                   : Eigen::Matrix2d(guess.position_sd_m * Eigen::Matrix2d::Identity());
+  const double position_sd_m =
+      guess.position_covariance_m2
+          ? std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(*guess.position_covariance_m2).eigenvalues().maxCoeff())
+          : guess.position_sd_m;
+  const double reach = 2.5 * position_sd_m + 1.0;
   float x0 = 1e9f, y0 = 1e9f, x1 = -1e9f, y1 = -1e9f;
   for (int k = 0; k < 16; ++k)
     for (double up : {0.0, 1.15 * options_.person_height_m}) {
@@ -389,7 +402,7 @@ TrackEstimate Tracker::start(const cv::Mat& bgr, double stamp_s, const InitialGu
         p.gait_slope = gait.slope;
         std::normal_distribution<double> normal(0.0, 1.0);
         const double phase = std::uniform_real_distribution<double>(0.0, 1.0)(random);
-        const Eigen::Vector2d at = guess.position_m + guess.position_sd_m * Eigen::Vector2d(normal(random), normal(random));
+        const Eigen::Vector2d at = guess.position_m + position_factor * Eigen::Vector2d(normal(random), normal(random));
         const double heading = guess.heading_sd_rad >= M_PI
                                    ? std::uniform_real_distribution<double>(-M_PI, M_PI)(random)
                                    : guess.heading_rad + guess.heading_sd_rad * normal(random);

@@ -10,6 +10,17 @@
 
 namespace kneed_walker::core::tracking {
 
+namespace {
+
+// A track started from its ground track: the heading's spread at least this, rad (the walk's
+// direction wavers with each step about the ground track's mean).
+constexpr double kMinStartHeadingSdRad = 0.1;
+// ... and its gaits within the measured speed's 2-sd range widened by the gait table's speed
+// spacing, km/h.
+constexpr double kStartSpeedMarginKmh = 0.5;
+
+}  // namespace
+
 const common::OptionTable<SessionOptions>& sessionOptionTable() {
   using common::OptionField;
   using O = SessionOptions;
@@ -20,6 +31,9 @@ const common::OptionTable<SessionOptions>& sessionOptionTable() {
        "find walking people in the image when no box or guess is given"},
       {"heading_frames", [](O& o) -> OptionField { return &o.heading_frames; }, 1, 50, "frames",
        "a found person's walking direction from their blob this many frames on"},
+      {"start_window_s", [](O& o) -> OptionField { return &o.start_window_s; }, 0, 5, "s",
+       "a track from a box or a found person starts after its ground track watched them this long, "
+       "from where it says they stood and walked (the frames are held, then tracked; 0: at once)"},
       {"min_start_speed_kmh", [](O& o) -> OptionField { return &o.min_start_speed_kmh; }, 0, 20, "km/h",
        "a new track starts on the gaits from this speed"},
       {"max_start_speed_kmh", [](O& o) -> OptionField { return &o.max_start_speed_kmh; }, 0, 20, "km/h",
@@ -69,6 +83,7 @@ const char* stateName(SessionState state) {
   switch (state) {
     case SessionState::kLearningBackground: return "learning the background";
     case SessionState::kWaitingForPerson: return "waiting for a person";
+    case SessionState::kStartingTrack: return "starting a track";
     case SessionState::kTracking: return "tracking";
     case SessionState::kLost: return "lost";
   }
@@ -148,71 +163,200 @@ std::vector<SessionAnswer> TrackingSession::feed(const cv::Mat& bgr, double stam
                                 std::to_string(camera.width()) + "x" + std::to_string(camera.height()) + " BGR");
   if (!std::isfinite(stamp_s)) throw std::invalid_argument("the frame's stamp is not finite");
   const int input = next_input_++;
-  if (state_ != SessionState::kLearningBackground) return {process(bgr, stamp_s, input)};
+  if (state_ != SessionState::kLearningBackground) {
+    process(bgr, stamp_s, input);
+    return releaseAnswers();
+  }
   held_.emplace_back(bgr.clone(), stamp_s);
   if (static_cast<int>(held_.size()) < options_.background_frames) return {};
-  return flushHeld();
+  learnBackgroundFromHeld();
+  return releaseAnswers();
 }
 
-std::vector<SessionAnswer> TrackingSession::flushHeld() {
-  if (held_.empty()) return {};
+void TrackingSession::learnBackgroundFromHeld() {
+  if (held_.empty()) return;
   std::vector<cv::Mat> frames;
   for (const auto& [frame, stamp] : held_) frames.push_back(frame);
   std::vector<std::pair<cv::Mat, double>> held = std::move(held_);
   setBackground(vision::BackgroundModel::learn(frames));
   background_given_ = false;  // learned from the input: reset() learns again
-  std::vector<SessionAnswer> answers;
   const int first = next_input_ - static_cast<int>(held.size());
-  for (size_t i = 0; i < held.size(); ++i)
-    answers.push_back(process(held[i].first, held[i].second, first + static_cast<int>(i)));
+  for (size_t i = 0; i < held.size(); ++i) process(held[i].first, held[i].second, first + static_cast<int>(i));
+}
+
+std::vector<SessionAnswer> TrackingSession::flushHeld() {
+  learnBackgroundFromHeld();
+  // The input ended: a starting track starts from the frames it has.
+  for (int s = 0; s < static_cast<int>(slots_.size()); ++s)
+    if (slots_[s].start) finishStart(s);
+  return releaseAnswers();
+}
+
+std::vector<SessionAnswer> TrackingSession::releaseAnswers() {
+  if (std::any_of(slots_.begin(), slots_.end(), [](const Slot& slot) { return slot.start.has_value(); })) return {};
+  std::vector<SessionAnswer> answers(std::make_move_iterator(held_answers_.begin()),
+                                     std::make_move_iterator(held_answers_.end()));
+  held_answers_.clear();
   return answers;
 }
 
-bool TrackingSession::startTrack(int s, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
-                                 PersonAnswer& person, SessionAnswer& answer) {
+int TrackingSession::framesHeld() const { return static_cast<int>(held_.size() + held_answers_.size()); }
+
+void TrackingSession::beginStart(int s, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
+                                  PersonAnswer& person, const std::string& why) {
   Slot& slot = slots_[s];
   // The person's height: the guess's, else person_height_m when the user gave it, else the
-  // stature the person's ground track measures in this frame (rounded to 1 cm; the default
-  // when their head is not seen). The ground track starts at the guess and holds the particles
-  // from the first frame on; it goes on estimating a stature it was not given.
-  std::optional<double> height_m = guess.person_height_m;
-  if (!height_m && !options_.estimate_person_height) height_m = default_height_m_;
-  auto ground = std::make_unique<person::GroundTracker>(tracker().camera(), tracker().ground(), options_.ground_track,
-                                                        tracker().keepsWholePath());
-  ground->start(guess.position_m, height_m, stamp_s);
-  const person::GroundTrackEstimate ground_estimate = ground->update(bgr, background_, stamp_s);
-  const bool estimated = !height_m && ground_estimate.head_used;
-  if (estimated) height_m = std::clamp(std::round(100 * ground_estimate.stature()) / 100, kMinPersonHeightM, kMaxPersonHeightM);
-  Tracker& tracker = slotTracker(s, height_m);
-  TrackEstimate estimate;
-  try {
-    estimate = tracker.start(bgr, stamp_s, guess, &ground_estimate);
-  } catch (const std::invalid_argument& e) {
-    // The guess does not fit the image (e.g. a box around no person): the frame is
-    // answered as waiting and the person is looked for in the image instead.
-    answer.start_failed = true;
-    answer.message = std::string("could not start from the guess: ") + e.what();
-    return false;
-  }
-  slot.started_input = input;
-  slot.track_inputs.emplace_back(input, stamp_s);
-  slot.ground = std::move(ground);
+  // stature their ground track measures (finishStart). The ground track keeps every frame until
+  // the track starts, for its smoothed estimate at the first.
+  Start start{guess, guess.person_height_m, why, {}};
+  if (!start.height_m && !options_.estimate_person_height) start.height_m = default_height_m_;
+  slot.ground = std::make_unique<person::GroundTracker>(tracker().camera(), tracker().ground(), options_.ground_track,
+                                                        /*keep_history=*/true);
+  slot.ground->start(guess.position_m, start.height_m, stamp_s);
   slot.ground_inputs.clear();
-  if (tracker.keepsWholePath()) slot.ground_inputs.push_back(input);
-  person.ground_track = ground_estimate;
-  person.started = true;
+  slot.start = std::move(start);
+  trackGround(slot, bgr, stamp_s, input, person);
+  person.starting = true;
+  if (startDue(slot)) return;  // at this frame's end
   char text[160];
-  std::snprintf(text, sizeof text, "started at (%.2f, %.2f) m, heading %s, %.2f m tall%s", guess.position_m.x(),
-                guess.position_m.y(),
-                guess.heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess.heading_rad) + " rad").c_str(),
-                tracker.personHeightM(), estimated ? " (measured)" : "");
+  std::snprintf(text, sizeof text, "starting at (%.2f, %.2f) m: watching the person's ground track for %.1f s",
+                guess.position_m.x(), guess.position_m.y(), options_.start_window_s);
   person.message = text;
-  collectMapFrames(slot, person);
-  person.estimate = estimate;
-  return true;
 }
 
-SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
+bool TrackingSession::startDue(const Slot& slot) const {
+  if (!slot.start) return false;
+  const Start& start = *slot.start;
+  if (!start.guess.from_ground_track || options_.start_window_s <= 0) return true;
+  return start.frames.back().stamp_s - start.frames.front().stamp_s >= options_.start_window_s - 1e-9;
+}
+
+PersonAnswer& TrackingSession::heldPerson(int input, int body) {
+  const auto answer = std::find_if(held_answers_.begin(), held_answers_.end(),
+                                   [&](const SessionAnswer& a) { return a.input == input; });
+  if (answer == held_answers_.end()) throw std::logic_error("no held answer for input " + std::to_string(input));
+  auto at = std::find_if(answer->people.begin(), answer->people.end(), [&](const PersonAnswer& p) { return p.body >= body; });
+  if (at == answer->people.end() || at->body != body) {
+    PersonAnswer person;
+    person.body = body;
+    at = answer->people.insert(at, std::move(person));
+  }
+  return *at;
+}
+
+InitialGuess TrackingSession::guessFromGroundTrack(InitialGuess guess, const person::GroundTrackEstimate& at) const {
+  // Where the person stood, the track's spread widened by the body's own offset from the
+  // silhouette's foot point; the direction and speed of their walk when the velocity tells it
+  // (its speed over twice its spread), else any heading at the guess's speeds.
+  guess.position_m = at.position();
+  const double offset_sd = options_.ground_track.near_foot_sd_m;
+  guess.position_covariance_m2 =
+      at.covariance.block<2, 2>(person::kX, person::kX) + offset_sd * offset_sd * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d velocity = at.velocity();
+  const double speed_mps = velocity.norm();
+  const Eigen::Vector2d along = speed_mps > 0 ? Eigen::Vector2d(velocity / speed_mps) : Eigen::Vector2d::UnitX();
+  const double speed_sd_mps =
+      std::sqrt(std::max(0.0, along.dot(at.covariance.block<2, 2>(person::kVx, person::kVx) * along)));
+  if (!(speed_mps > 2 * speed_sd_mps)) {
+    guess.heading_sd_rad = M_PI;
+    return guess;
+  }
+  guess.heading_rad = at.headingRad();
+  guess.heading_sd_rad = std::max(at.headingSdRad(), kMinStartHeadingSdRad);
+  // The gaits within the speed's 2-sd range and a gait spacing on either side, among the
+  // guess's; a speed outside the guess's takes its nearest.
+  const double speed_kmh = 3.6 * speed_mps, reach_kmh = 3.6 * 2 * speed_sd_mps + kStartSpeedMarginKmh;
+  const double low = std::max(guess.min_speed_kmh, speed_kmh - reach_kmh);
+  const double high = std::min(guess.max_speed_kmh, speed_kmh + reach_kmh);
+  if (low <= high) {
+    guess.min_speed_kmh = low, guess.max_speed_kmh = high;
+  } else {
+    guess.min_speed_kmh = guess.max_speed_kmh = std::clamp(speed_kmh, guess.min_speed_kmh, guess.max_speed_kmh);
+  }
+  return guess;
+}
+
+void TrackingSession::finishStart(int s) {
+  Slot& slot = slots_[s];
+  Start start = std::move(*slot.start);
+  slot.start.reset();
+  const std::vector<HeldFrame>& frames = start.frames;
+  const int n = static_cast<int>(frames.size()), body = s + 1;
+  for (const HeldFrame& frame : frames) heldPerson(frame.input, body).starting = false;
+  // The ground track over the held frames, smoothed: at each, what the whole window saw.
+  const std::vector<person::GroundTrackEstimate> ground = slot.ground->smoothed();
+  if (static_cast<int>(ground.size()) != n) throw std::logic_error("a starting track's ground track lost frames");
+  const bool head_seen = std::any_of(ground.begin(), ground.end(), [](const auto& g) { return g.head_used; });
+  std::optional<double> height_m = start.height_m;
+  const bool estimated = !height_m && head_seen;
+  if (estimated)
+    height_m = std::clamp(std::round(100 * ground.front().stature()) / 100, kMinPersonHeightM, kMaxPersonHeightM);
+  // (A ground track that never saw the person, e.g. merged with another in one silhouette,
+  // leaves the guess as it was.)
+  const bool from_ground_track = start.guess.from_ground_track && options_.start_window_s > 0 &&
+                                 std::any_of(ground.begin(), ground.end(), [](const auto& g) { return g.measured; });
+  Tracker& tracker = slotTracker(s, height_m);
+  // The held frames tracked from the first; a track lost among them starts again at the next
+  // from the ground track there, with the colours it learned.
+  for (int k = 0; k < n; ++k) {
+    PersonAnswer& person = heldPerson(frames[k].input, body);
+    tracker.setBacklogFrames(backlog_frames_ + n - 1 - k);  // online, they are a backlog of the frame budget
+    TrackEstimate estimate;
+    if (!tracker.started()) {
+      InitialGuess guess = start.guess;
+      if (k > 0) {
+        guess = guessFromGroundTrack(start.guess, ground[k]);
+        guess.same_person = true;
+      } else if (from_ground_track) {
+        guess = guessFromGroundTrack(start.guess, ground[0]);
+      }
+      try {
+        estimate = tracker.start(frames[k].bgr, frames[k].stamp_s, guess, &ground[k]);
+      } catch (const std::invalid_argument& e) {
+        // The guess does not fit the image (e.g. a box around no person): the person is looked
+        // for in the image instead.
+        if (k == 0) {
+          SessionAnswer& last = held_answers_.back();
+          last.start_failed = true;
+          last.message = std::string("could not start from the guess: ") + e.what();
+        }
+        endTrack(slot);
+        break;
+      }
+      slot.started_input = frames[k].input;
+      person.started = true;
+      char text[260];
+      std::snprintf(text, sizeof text, "%sstarted at (%.2f, %.2f) m, heading %s, %.2f m tall%s%s",
+                    k == 0 ? start.why.c_str() : "again: ", guess.position_m.x(), guess.position_m.y(),
+                    guess.heading_sd_rad >= M_PI ? "unknown" : (std::to_string(guess.heading_rad) + " rad").c_str(),
+                    tracker.personHeightM(), estimated ? " (measured)" : "",
+                    k > 0 || from_ground_track ? " (from its ground track)" : "");
+      person.message = text;
+    } else {
+      estimate = tracker.track(frames[k].bgr, frames[k].stamp_s, &ground[k]);
+    }
+    slot.track_inputs.emplace_back(frames[k].input, frames[k].stamp_s);
+    collectMapFrames(slot, person);
+    person.estimate = estimate;
+    if (estimate.lost) {
+      last_seen_m_ = estimate.pose.joints[body::kWaist].head<2>();
+      const bool last = k + 1 == n;
+      for (MapFrame& frame : last ? endTrack(slot, &person) : endWalker(slot)) person.map_frames.push_back(std::move(frame));
+      person.ended = true;
+      person.message = last ? "lost: the best particle explains the image worse than the background; looking again"
+                            : "lost: the best particle explains the image worse than the background; starting "
+                              "again from the ground track";
+    }
+  }
+  tracker.setBacklogFrames(backlog_frames_);
+  if (slot.ground) {
+    slot.ground->keepHistory(tracker.keepsWholePath());
+    if (!tracker.keepsWholePath()) slot.ground_inputs.clear();
+  }
+  for (SessionAnswer& answer : held_answers_) describe(answer);
+}
+
+void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
   const auto began = std::chrono::steady_clock::now();
   SessionAnswer answer;
   answer.input = input;
@@ -221,32 +365,43 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
   std::vector<PersonAnswer> people(slots);
   for (int s = 0; s < slots; ++s) people[s].body = s + 1;
   auto waist = [&](int s) { return people[s].estimate->pose.joints[body::kWaist].head<2>().eval(); };
+  // Where a busy slot's person is: its track's last waist, else its starting ground track's.
+  auto position = [&](int s) {
+    return slots_[s].running() ? slots_[s].tracker->lastPose().joints[body::kWaist].head<2>().eval()
+                               : slots_[s].ground->current().position();
+  };
 
   // A given guess goes to a free slot (one not about to start again where its person was lost,
-  // if there is such), else replaces the running track nearest to it.
+  // if there is such), else replaces the busy track nearest to it.
   int given = -1;
   if (pending_guess_) {
     for (int s = 0; s < slots && given < 0; ++s)
-      if (!slots_[s].running() && !slots_[s].reacquire) given = s;
+      if (!slots_[s].busy() && !slots_[s].reacquire) given = s;
     for (int s = 0; s < slots && given < 0; ++s)
-      if (!slots_[s].running()) given = s;
+      if (!slots_[s].busy()) given = s;
     if (given < 0) {
       double nearest = std::numeric_limits<double>::infinity();
       for (int s = 0; s < slots; ++s) {
-        const double d = (slots_[s].tracker->lastPose().joints[body::kWaist].head<2>() - pending_guess_->position_m).norm();
+        const double d = (position(s) - pending_guess_->position_m).norm();
         if (d < nearest) nearest = d, given = s;
       }
     }
   }
   // The running tracks: this frame's step, each in its share of the frame's budget; a lost
-  // track ends.
+  // track ends. The starting ones: their ground track's step, the frame held.
   const int running = trackCount();
   for (Slot& slot : slots_)
     if (slot.tracker) slot.tracker->setBudgetShare(1.0 / std::max(1, running));
   for (int s = 0; s < slots; ++s) {
     Slot& slot = slots_[s];
-    if (!slot.running() || s == given) continue;
+    if (s == given) continue;
     PersonAnswer& person = people[s];
+    if (slot.start) {
+      trackGround(slot, bgr, stamp_s, input, person);
+      person.starting = true;
+      continue;
+    }
+    if (!slot.running()) continue;
     trackGround(slot, bgr, stamp_s, input, person);
     const TrackEstimate estimate =
         slot.tracker->track(bgr, stamp_s, person.ground_track ? &*person.ground_track : nullptr);
@@ -278,25 +433,25 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
     if (!slots_[s].reacquire || s == given) continue;
     const InitialGuess guess = *slots_[s].reacquire;
     slots_[s].reacquire.reset();
-    if (startTrack(s, bgr, stamp_s, input, guess, people[s], answer))
-      people[s].message = "found again where lost: " + people[s].message;
+    beginStart(s, bgr, stamp_s, input, guess, people[s], "found again where lost: ");
   }
   if (pending_guess_) {
     const InitialGuess guess = *pending_guess_;
     pending_guess_.reset();
     sightings_.clear();
-    if (slots_[given].running()) {
+    if (slots_[given].busy()) {
+      const bool was_running = slots_[given].running();
       for (MapFrame& frame : endTrack(slots_[given], &people[given]))
         people[given].map_frames.push_back(std::move(frame));
-      people[given].ended = true;
+      people[given].ended = was_running;
       people[given].message = "replaced by the track of a given guess";
     }
     slots_[given].reacquire.reset();
-    startTrack(given, bgr, stamp_s, input, guess, people[given], answer);
+    beginStart(given, bgr, stamp_s, input, guess, people[given]);
   } else if (options_.find_people) {
     std::vector<int> free, lost_now;
     for (int s = 0; s < slots; ++s) {
-      if (!slots_[s].running() && !people[s].ended) free.push_back(s);
+      if (!slots_[s].busy() && !people[s].ended) free.push_back(s);
       if (people[s].ended && people[s].estimate && people[s].estimate->lost) lost_now.push_back(s);
     }
     if (!free.empty() || !lost_now.empty()) {
@@ -325,25 +480,42 @@ SessionAnswer TrackingSession::process(const cv::Mat& bgr, double stamp_s, int i
         size_t next = 0;
         for (const InitialGuess& guess : guessesFromSightings(std::move(found), input)) {
           if (next == free.size()) break;
-          if (startTrack(free[next], bgr, stamp_s, input, guess, people[free[next]], answer)) ++next;
+          beginStart(free[next], bgr, stamp_s, input, guess, people[free[next]]);
+          ++next;
         }
         if (next == free.size()) sightings_.clear();
       }
     }
   }
 
-  bool tracking = false, lost = false;
-  for (PersonAnswer& person : people) {
-    if (!person.estimate && !person.ended) continue;
-    if (person.estimate) (person.estimate->lost ? lost : tracking) = true;
-    answer.people.push_back(std::move(person));
-  }
-  state_ = answer.state = tracking ? SessionState::kTracking : lost ? SessionState::kLost : SessionState::kWaitingForPerson;
-  if (!tracking && !answer.start_failed)
-    answer.message = lost ? "lost: looking for people again"
-                          : options_.find_people ? "looking for a walking person" : "waiting for the person's box";
+  for (PersonAnswer& person : people)
+    if (person.estimate || person.ended || person.starting) answer.people.push_back(std::move(person));
+  describe(answer);
+  held_answers_.push_back(std::move(answer));
+  // The starts due: a guess that does not wait, a full window.
+  for (int s = 0; s < slots; ++s)
+    if (startDue(slots_[s])) finishStart(s);
+  state_ = held_answers_.back().state;
   last_frame_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - began).count();
-  return answer;
+}
+
+void TrackingSession::describe(SessionAnswer& answer) const {
+  bool tracking = false, lost = false, starting = false;
+  for (const PersonAnswer& person : answer.people) {
+    if (person.estimate) (person.estimate->lost ? lost : tracking) = true;
+    starting = starting || person.starting;
+  }
+  answer.state = tracking   ? SessionState::kTracking
+                 : starting ? SessionState::kStartingTrack
+                 : lost     ? SessionState::kLost
+                            : SessionState::kWaitingForPerson;
+  if (answer.start_failed) return;
+  switch (answer.state) {
+    case SessionState::kTracking: answer.message.clear(); break;
+    case SessionState::kStartingTrack: answer.message = "starting a track: watching the person's ground track"; break;
+    case SessionState::kLost: answer.message = "lost: looking for people again"; break;
+    default: answer.message = options_.find_people ? "looking for a walking person" : "waiting for the person's box";
+  }
 }
 
 void TrackingSession::collectMapFrames(Slot& slot, PersonAnswer& person) {
@@ -363,17 +535,27 @@ void TrackingSession::collectMapFrames(Slot& slot, PersonAnswer& person) {
 void TrackingSession::trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person) {
   if (!slot.ground) return;
   person.ground_track = slot.ground->update(bgr, background_, stamp_s);
-  if (slot.tracker->keepsWholePath()) slot.ground_inputs.push_back(input);
+  if (slot.start) {
+    slot.start->frames.push_back({slot.start->guess.from_ground_track ? bgr.clone() : bgr, stamp_s, input});
+    slot.ground_inputs.push_back(input);
+  } else if (slot.tracker->keepsWholePath()) {
+    slot.ground_inputs.push_back(input);
+  }
 }
 
 std::vector<MapFrame> TrackingSession::endTrack(Slot& slot, PersonAnswer* person) {
-  if (person && slot.ground && slot.tracker->keepsWholePath()) {
+  if (person && slot.ground && !slot.start && slot.tracker->keepsWholePath()) {
     const std::vector<person::GroundTrackEstimate> smoothed = slot.ground->smoothed();
     for (size_t i = 0; i < smoothed.size() && i < slot.ground_inputs.size(); ++i)
       person->ground_track_smoothed.emplace_back(slot.ground_inputs[i], smoothed[i]);
   }
   slot.ground.reset();
   slot.ground_inputs.clear();
+  slot.start.reset();
+  return endWalker(slot);
+}
+
+std::vector<MapFrame> TrackingSession::endWalker(Slot& slot) {
   std::vector<MapFrame> rest;
   if (slot.running()) {
     std::vector<int> frames;
@@ -412,6 +594,9 @@ std::vector<vision::PersonCandidate> TrackingSession::untrackedPeople(const cv::
     // they stand within a stride of its waist.
     const cv::Point2d centre = (person.box_px.tl() + person.box_px.br()) * 0.5;
     const bool tracked = std::any_of(slots_.begin(), slots_.end(), [&](const Slot& slot) {
+      if (slot.start)
+        return slot.ground->expectedBox().contains(centre) ||
+               (slot.ground->current().position() - person.ground_xy_m).norm() < 0.8;
       if (!slot.running()) return false;
       const body::BodyPose& pose = slot.tracker->lastPose();
       return slot.tracker->imageBox(pose).contains(centre) ||
@@ -449,6 +634,7 @@ std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<visi
     const Eigen::Vector2d walked = current->person.ground_xy_m - before->person.ground_xy_m;
     if (walked.norm() < options_.min_walk_m) continue;
     guesses.push_back(foundPersonGuess(current->person.ground_xy_m, std::atan2(walked.y(), walked.x()), 0.5));
+    guesses.back().from_ground_track = true;
   }
   return guesses;
 }
@@ -473,6 +659,7 @@ void TrackingSession::reset() {
     slot.reacquire.reset();
   }
   held_.clear();
+  held_answers_.clear();
   pending_guess_.reset();
   sightings_.clear();
   last_seen_m_.reset();

@@ -80,8 +80,10 @@ kw::tracking::InitialGuess PersonStart::guessAt(const cv::Rect2d& box, int frame
   guess.max_speed_kmh = options_.guess.max_speed_kmh;
   guess.position_sd_m = options_.guess.position_sd_m;
   if (options_.heading_given) {
+    // The user said which way: the track starts at once, not from the person's ground track.
     guess.heading_rad = options_.guess.heading_rad;
     guess.heading_sd_rad = options_.guess.heading_sd_rad;
+    guess.from_ground_track = false;
   } else {
     const std::optional<double> heading = headingFromBoxes(frame, box, 5);
     guess.heading_rad = heading.value_or(0.0);

@@ -161,9 +161,11 @@ void TrackingLoop::drawAnswer(const kw::tracking::SessionAnswer& a, bool latest,
   outputs_.writeOverlay(picture, frame, bodies_box);
 }
 
-// The frame's whole tracking (all people, the search for new ones) and the trackers' parts.
+// The frame's whole tracking (all people, the search for new ones) and the trackers' parts, for
+// a frame answered as it came (not frames held and tracked together: the background's, a
+// starting track's).
 void TrackingLoop::recordTiming(const std::vector<kw::tracking::SessionAnswer>& answers) {
-  if (answers.empty() || answers.back().people.empty() || summary_.answered <= 1) return;
+  if (answers.size() != 1 || answers.back().people.empty() || summary_.answered <= 1) return;
   double precompute = 0, particles = 0;
   for (const kw::tracking::PersonAnswer& person : answers.back().people) {
     const kw::tracking::TrackerTiming& timing = session_.tracker(person.body).timing();

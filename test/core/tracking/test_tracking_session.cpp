@@ -54,18 +54,21 @@ SessionOptions holding(int frames) {
   return options;
 }
 
-// Feeds the whole walk; returns every answer.
+// Feeds the whole walk; returns every answer (flushing those held at the end).
 std::vector<SessionAnswer> run(TrackingSession& session) {
   const test::RenderedWalk& s = scene();
   std::vector<SessionAnswer> answers;
   for (size_t f = 0; f < s.frames.size(); ++f)
     for (SessionAnswer& a : session.feed(s.frames[f], 0.1 * f)) answers.push_back(std::move(a));
+  for (SessionAnswer& a : session.flushHeld()) answers.push_back(std::move(a));
   return answers;
 }
 
 TEST(TrackingSession, HoldsFramesToLearnTheBackgroundThenAnswersEachOnceInOrder) {
   const test::RenderedWalk& s = scene();
-  TrackingSession session(makeTracker(200), holding(8));
+  SessionOptions options = holding(8);
+  options.find_people = false;  // no track starts (whose frames would be held too)
+  TrackingSession session(makeTracker(200), options);
   for (int f = 0; f < 7; ++f) {
     EXPECT_TRUE(session.feed(s.frames[f], 0.1 * f).empty());
     EXPECT_EQ(session.state(), SessionState::kLearningBackground);
@@ -192,6 +195,44 @@ TEST(TrackingSession, KeepingTheWholePathGivesOneParticlesPathAtTheEnd) {
   EXPECT_GT(medianSlipM(lagged_path), medianSlipM(path));
 }
 
+// A box starts a track from its person's ground track a second later (start_window_s): the
+// frames meanwhile are held, their answers too, then all answered at once, tracked from the
+// box's frame; the particles start walking the way the ground track saw the person go.
+TEST(TrackingSession, ABoxStartsFromItsGroundTrackAfterTheWindowAndAnswersEveryFrame) {
+  const test::RenderedWalk& s = scene();
+  TrackingSession session(makeTracker(300), holding(4));
+  session.startFromBox(truthBox());
+  std::vector<SessionAnswer> answers;
+  for (int f = 0; f <= 10; ++f) {
+    std::vector<SessionAnswer> now = session.feed(s.frames[f], 0.1 * f);
+    if (f < 10) {
+      EXPECT_TRUE(now.empty()) << "frame " << f;
+      if (f >= 3) EXPECT_EQ(session.state(), SessionState::kStartingTrack) << "frame " << f;
+    }
+    for (SessionAnswer& a : now) answers.push_back(std::move(a));
+  }
+  ASSERT_EQ(answers.size(), 11u);
+  for (int f = 0; f <= 10; ++f) {
+    EXPECT_EQ(answers[f].input, f);
+    ASSERT_NE(estimateOf(answers[f]), nullptr) << "frame " << f;
+    EXPECT_EQ(answers[f].state, SessionState::kTracking);
+    EXPECT_EQ(answers[f].person(1)->started, f == 0);
+    EXPECT_FALSE(answers[f].person(1)->starting);
+  }
+  const std::string& message = answers[0].person(1)->message;
+  std::cout << message << "\n";
+  EXPECT_NE(message.find("from its ground track"), std::string::npos) << message;
+  EXPECT_EQ(message.find("heading unknown"), std::string::npos) << message;
+  const Eigen::Vector2d walked =
+      (s.walk.frames[10].pose.joints[body::kWaist] - s.walk.frames[0].pose.joints[body::kWaist]).head<2>();
+  const double heading_error =
+      std::remainder(estimateOf(answers[10])->heading_rad - std::atan2(walked.y(), walked.x()), 2 * M_PI);
+  std::cout << "heading error at frame 10: " << heading_error * 180 / M_PI << " deg\n";
+  EXPECT_LT(std::abs(heading_error), 0.25);
+  EXPECT_EQ(session.state(), SessionState::kTracking);
+  EXPECT_EQ(session.feed(s.frames[11], 1.1).size(), 1u);
+}
+
 // Each tracked frame carries its person's ground track (filtered); with the whole path kept,
 // each track's end (a loss, the input's end) gives it smoothed, one per tracked frame, near the
 // true waist.
@@ -257,17 +298,21 @@ TEST(TrackingSession, APersonsHeightIsMeasuredUnlessGiven) {
   }
 }
 
-// A box around no person cannot start a track: the frame is answered (waiting, saying why),
-// frames keep their numbers, and the session looks for the person instead.
+// A box around no person cannot start a track: when its start is due (the end of its ground
+// track's window: 1 s, frame 10) the frame is answered (waiting, saying why), frames keep their
+// numbers, and the session looks for the person instead.
 TEST(TrackingSession, ABoxAroundNobodyIsAnsweredAndThePersonFoundInstead) {
   TrackingSession session(makeTracker(100), holding(10));
   session.startFromBox(cv::Rect2d(0, 300, 10, 5));  // an empty corner of the ground
   const std::vector<SessionAnswer> answers = run(session);
   ASSERT_EQ(answers.size(), scene().frames.size());
   for (size_t f = 0; f < answers.size(); ++f) EXPECT_EQ(answers[f].input, static_cast<int>(f));
-  EXPECT_TRUE(answers[0].start_failed);
-  EXPECT_EQ(answers[0].state, SessionState::kWaitingForPerson);
-  EXPECT_NE(answers[0].message.find("could not start"), std::string::npos) << answers[0].message;
+  const auto failed = std::find_if(answers.begin(), answers.end(), [](const SessionAnswer& a) { return a.start_failed; });
+  ASSERT_NE(failed, answers.end());
+  EXPECT_EQ(failed->input, 10);
+  EXPECT_EQ(failed->state, SessionState::kWaitingForPerson);
+  EXPECT_NE(failed->message.find("could not start"), std::string::npos) << failed->message;
+  for (auto a = answers.begin(); a != failed; ++a) EXPECT_EQ(a->state, SessionState::kWaitingForPerson) << a->input;
   EXPECT_TRUE(std::any_of(answers.begin(), answers.end(), [](const SessionAnswer& a) { return a.started(); }));
 }
 
@@ -404,7 +449,8 @@ TEST(TrackingSession, ATrackLostWhileItsPersonIsInViewStartsAgainWhereTheyAre) {
 }
 
 // A second track started on the person one track already follows merges into it: the newer
-// ends within a few frames, saying so, and gives its MAP frames; the older goes on. Both tracks
+// (from a box at frame 12, its particles started from its ground track at frame 22 and tracked
+// from 12) ends within a few frames, saying so, and gives its MAP frames; the older goes on. Both tracks
 // must follow the person for that: with 500 particles they merged on 7 of the seeds 1-8 (at
 // frame 13 or 15), with 200 on 5 of 7 since the prior's table holds brisk walks (2026-12-02).
 TEST(TrackingSession, ASecondTrackOnThePersonMergesIntoTheFirst) {
@@ -434,7 +480,7 @@ TEST(TrackingSession, ASecondTrackOnThePersonMergesIntoTheFirst) {
   }
   std::cout << "the second track merged at frame " << merged_at << "\n";
   EXPECT_GT(merged_at, 12);
-  EXPECT_LE(merged_at, 20);
+  EXPECT_LE(merged_at, 30);
   EXPECT_EQ(session.trackCount(), 1);
 }
 

@@ -129,6 +129,8 @@ class GroundTracker {
   // Forgets the last track.
   void start(const Eigen::Vector2d& position_m, std::optional<double> stature_m, double stamp_s);
   bool started() const { return started_; }
+  // Whether every frame's steps are kept from now on; false forgets all but the last.
+  void keepHistory(bool keep);
 
   // One frame: predicts to its stamp (after the last), measures the person near the prediction
   // and corrects. Returns the frame's estimate.

@@ -33,6 +33,9 @@ namespace kneed_walker::core::tracking {
 struct InitialGuess {
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  // ground XY under the body
   double position_sd_m = 0.25;
+  // The position's covariance, m², when known (a ground track's: long along the line of sight);
+  // it replaces position_sd_m.
+  std::optional<Eigen::Matrix2d> position_covariance_m2;
   double heading_rad = 0;
   double heading_sd_rad = 0.3;  // ≥ π: any heading
   double min_speed_kmh = 3.0, max_speed_kmh = 6.0;  // the gaits the particles may start on
@@ -48,10 +51,16 @@ struct InitialGuess {
   // learned then instead of learning them from a body placed at the guess, which fails when the
   // guess sits beside the person (too few pixels the background explains badly).
   bool same_person = false;
+  // A rough guess (a box's, a person found in the image): a session (TrackingSession) watches the
+  // person's ground track for SessionOptions::start_window_s first, and starts the particles at
+  // the window's first frame from what the track measured there over the window: the position
+  // with its covariance, the heading and the speed. The guess gives where the ground track
+  // starts, and the speeds when the track cannot tell the walking direction.
+  bool from_ground_track = false;
 };
 
 // A guess from a person's box in the image: the feet at the middle of the box's bottom edge on
-// the ground plane; heading unknown unless given. Throws std::invalid_argument when the box is
+// the ground plane; heading unknown; started from the person's ground track (from_ground_track). Throws std::invalid_argument when the box is
 // empty, lies mostly (over half its area) outside the image, or its bottom does not see the ground.
 InitialGuess guessFromBox(const vision::Camera& camera, const vision::GroundPlane& ground,
                           const cv::Rect2d& box_px);

@@ -9,6 +9,10 @@
 //   * starts a track from a guess or a box when given one, and otherwise finds people itself
 //     (vision/person_detector.h): a blob the size of a person, away from every track, seen
 //     again `heading_frames` later nearby, gives the position and the walking direction;
+//   * starts a track from a rough guess (a box, a person found: InitialGuess::from_ground_track)
+//     once the person's ground track has watched them for `start_window_s`: the frames are held
+//     meanwhile (their answers too), and then tracked from the first, the particles starting
+//     where the track says the person stood, walked and how fast;
 //   * ends a track that is lost (TrackEstimate::lost: the person left, or is hidden) or that
 //     has merged with an older one (their waists nearer than `merge_distance_m`); a lost
 //     track starts again at the next frame from a person found near where it lost them
@@ -38,6 +42,11 @@ struct SessionOptions {
   int background_frames = 20;  // frames held at the start to learn the background from, [1, 500]
   int heading_frames = 5;      // a found person's direction from their blob this many frames on, [1, 50]
   double min_walk_m = 0.15;    // the blob must move at least this far in heading_frames, m
+  // A track started from a rough guess (a box, a person found) waits this long, its frames held,
+  // while the person's ground track measures where they go; then it starts from the ground
+  // track at the first of those frames and tracks through them. 0: at once, from the guess.
+  // s, [0, 5].
+  double start_window_s = 1.0;
   bool find_people = true;     // find the person in the image when no guess or box is given
   // The walking speeds a track started from a box or a found person starts on, km/h (the table's
   // gaits in this range; TrackerOptions::min_gait_speed_kmh says which gaits exist). 1.5–6 with
@@ -78,6 +87,7 @@ std::vector<std::string> validate(const SessionOptions& options);
 enum class SessionState {
   kLearningBackground,  // frames are held until the background is learned
   kWaitingForPerson,    // nobody is tracked: no guess or box given and nobody found yet
+  kStartingTrack,       // a track is starting: frames are held while its ground track watches the person
   kTracking,            // someone is tracked at this frame
   kLost,                // every track was lost at this frame; people are looked for again
 };
@@ -95,6 +105,10 @@ struct MapFrame {
 struct PersonAnswer {
   int body = 1;          // the slot, 1..max_people: the REP 155 body id
   bool started = false;  // a track started in this slot at this frame
+  // The slot's person is watched by their ground track before their track starts
+  // (SessionOptions::start_window_s): the answer has the ground track and no estimate. Answers
+  // are held while a track starts, so this is seen only when the input ends first.
+  bool starting = false;
   // The slot's track ended at this frame (lost, merged into an older track, replaced by a given
   // guess); a track started at the same frame is a new one.
   bool ended = false;
@@ -143,10 +157,11 @@ class TrackingSession {
 
   // One frame (BGR 8-bit, the camera's size; else std::invalid_argument and nothing changes).
   // Returns the answers of the frames completed by it, in input order: none while frames are
-  // held for the background, all of them once it is learned, else this frame's.
+  // held (for the background, or while a track starts), all of them once they are done, else
+  // this frame's.
   std::vector<SessionAnswer> feed(const cv::Mat& bgr, double stamp_s);
-  // At the end of an input shorter than background_frames: learns from the frames held so
-  // far and answers them.
+  // At the end of the input: answers the frames still held (learning the background from them
+  // when they were too few; starting the starting tracks from the frames seen).
   std::vector<SessionAnswer> flushHeld();
   // The rest of the current tracks' MAP state sequences (end of input), by body; ends them.
   std::vector<PersonAnswer> finish();
@@ -159,6 +174,7 @@ class TrackingSession {
   // at construction: the camera, ground, background and settings every slot's tracker shares).
   const Tracker& tracker(int body = 1) const;
   int framesFed() const { return next_input_; }
+  int framesHeld() const;  // fed frames not yet answered
   int trackCount() const;  // tracks running now
   // Frames waiting behind the next one fed, for the trackers' frame budgets (Tracker::setBacklogFrames).
   void setBacklogFrames(int frames);
@@ -170,8 +186,22 @@ class TrackingSession {
     int input = 0;
     vision::PersonCandidate person;
   };
+  // A frame held by a starting track.
+  struct HeldFrame {
+    cv::Mat bgr;
+    double stamp_s = 0;
+    int input = 0;
+  };
+  // A track waiting for its ground track's window.
+  struct Start {
+    InitialGuess guess;
+    std::optional<double> height_m;  // given (the guess's, or person_height_m); else measured
+    std::string why;                 // what the start's message begins with
+    std::vector<HeldFrame> frames;   // from the frame it began at
+  };
   struct Slot {
     std::unique_ptr<Tracker> tracker;  // made when first used
+    std::optional<Start> start;        // its track is starting
     int started_input = -1;            // the input its track started at (the older track wins a merge)
     std::vector<std::pair<int, double>> track_inputs;  // per tracker frame: input index, stamp
     int map_written = -1;              // the last tracker frame given as a MapFrame
@@ -179,19 +209,41 @@ class TrackingSession {
     std::unique_ptr<person::GroundTracker> ground;  // the track's person's ground track
     std::vector<int> ground_inputs;                 // the input index of each of its frames
     bool running() const { return tracker && tracker->started(); }
+    bool busy() const { return running() || start.has_value(); }
   };
-  SessionAnswer process(const cv::Mat& bgr, double stamp_s, int input);
+  // Learns the background from the frames held for it, and tracks them.
+  void learnBackgroundFromHeld();
+  // Tracks the frame; its answer joins held_answers_.
+  void process(const cv::Mat& bgr, double stamp_s, int input);
+  // The held answers, when no track is starting.
+  std::vector<SessionAnswer> releaseAnswers();
+  // The answer's state and message from its people.
+  void describe(SessionAnswer& answer) const;
   // A guess for a person found in the image (the options' start speeds).
   InitialGuess foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad, double heading_sd_rad) const;
   // The people found in the frame away from the running tracks.
   std::vector<vision::PersonCandidate> untrackedPeople(const cv::Mat& bgr) const;
   // Guesses from the people seen now (untracked) and heading_frames ago.
   std::vector<InitialGuess> guessesFromSightings(std::vector<vision::PersonCandidate> people, int input);
-  // Starts slot's track at this frame; false (and the answer says why) when the guess cannot.
-  bool startTrack(int slot, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
-                  PersonAnswer& person, SessionAnswer& answer);
+  // Begins the slot's track at this frame: its ground track starts at the guess. The particles
+  // start when the window is full (finishStart), or at this frame's end for a guess that does
+  // not wait.
+  void beginStart(int slot, const cv::Mat& bgr, double stamp_s, int input, const InitialGuess& guess,
+                  PersonAnswer& person, const std::string& why = "");
+  bool startDue(const Slot& slot) const;
+  // Starts the slot's particles at its start's first frame and tracks its held frames, filling in
+  // their held answers (a track lost among them starts again at the next from the ground track).
+  // A guess that cannot start a track: the last held answer says why.
+  void finishStart(int slot);
+  // The slot's person in the held answer of an input (added when missing).
+  PersonAnswer& heldPerson(int input, int body);
   // Ends the slot's track: the rest of its MAP frames; its smoothed ground track into `person`.
   std::vector<MapFrame> endTrack(Slot& slot, PersonAnswer* person = nullptr);
+  // Ends the slot's walkers (its tracker's track), keeping its ground track: the rest of their MAP frames.
+  std::vector<MapFrame> endWalker(Slot& slot);
+  // `guess` moved to a ground track's estimate: its position and spread, its walking direction
+  // and speed when its velocity tells them.
+  InitialGuess guessFromGroundTrack(InitialGuess guess, const person::GroundTrackEstimate& at) const;
   // The slot's ground track's step at this frame, into `person`.
   void trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person);
   void collectMapFrames(Slot& slot, PersonAnswer& person);
@@ -206,6 +258,7 @@ class TrackingSession {
   bool background_given_ = false;
   SessionState state_ = SessionState::kLearningBackground;
   std::vector<std::pair<cv::Mat, double>> held_;  // frames held to learn the background
+  std::deque<SessionAnswer> held_answers_;         // answers held while a track starts
   std::optional<InitialGuess> pending_guess_;
   std::deque<std::vector<Sighting>> sightings_;   // the people found in the last frames
   std::optional<Eigen::Vector2d> last_seen_m_;    // where the last lost track last was
