@@ -48,8 +48,8 @@ void addStartOptions(CLI::App& app, StartOptions& start, std::string& stance) {
   app.add_option("--init-box", start.init_box, "the person's box in the first frame: x1 y1 x2 y2 (px)")->expected(4)
       ->check(FiniteRange(-1e5, 1e5));
   app.add_option("--boxes", start.boxes_path,
-                 "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box; the walking direction "
-                 "from the nearest box 5 frames on")
+                 "boxes CSV (frame,x1,y1,x2,y2,score,...): the first frame's best box, and a lost track's "
+                 "restart from the box nearest where it was lost")
       ->check(CLI::ExistingFile);
   app.add_option("--init-position", start.init_position, "ground position X Y (m) instead of a box")->expected(2)
       ->check(FiniteRange(-1e5, 1e5));

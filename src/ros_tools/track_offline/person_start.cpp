@@ -45,7 +45,7 @@ void PersonStart::startFirst(kw::tracking::TrackingSession& session, int frame) 
   } else if (!options_.init_box.empty()) {
     const std::vector<double>& b = options_.init_box;
     try {
-      session.startFrom(guessAt(cv::Rect2d(cv::Point2d(b[0], b[1]), cv::Point2d(b[2], b[3])), frame));
+      session.startFrom(guessAt(cv::Rect2d(cv::Point2d(b[0], b[1]), cv::Point2d(b[2], b[3]))));
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(std::string("--init-box: ") + e.what());
     }
@@ -55,7 +55,7 @@ void PersonStart::startFirst(kw::tracking::TrackingSession& session, int frame) 
       throw std::runtime_error("no box for frame " + std::to_string(frame) + " in " + options_.boxes_path);
     const auto best = std::max_element(it->second.begin(), it->second.end(),
                                        [](const auto& a, const auto& b) { return a.second < b.second; });
-    session.startFrom(guessAt(best->first, frame));
+    session.startFrom(guessAt(best->first));
   }
 }
 
@@ -69,12 +69,12 @@ std::optional<kw::tracking::InitialGuess> PersonStart::restartNear(int frame, co
     if (d < best) best = d, nearest = box;
   }
   if (!nearest) return std::nullopt;
-  kw::tracking::InitialGuess again = guessAt(*nearest, frame);
+  kw::tracking::InitialGuess again = guessAt(*nearest);
   again.stance_leg.reset();
   return again;
 }
 
-kw::tracking::InitialGuess PersonStart::guessAt(const cv::Rect2d& box, int frame) const {
+kw::tracking::InitialGuess PersonStart::guessAt(const cv::Rect2d& box) const {
   kw::tracking::InitialGuess guess = kw::tracking::guessFromBox(camera_, ground_, box);
   guess.min_speed_kmh = options_.guess.min_speed_kmh;
   guess.max_speed_kmh = options_.guess.max_speed_kmh;
@@ -84,31 +84,9 @@ kw::tracking::InitialGuess PersonStart::guessAt(const cv::Rect2d& box, int frame
     guess.heading_rad = options_.guess.heading_rad;
     guess.heading_sd_rad = options_.guess.heading_sd_rad;
     guess.from_ground_track = false;
-  } else {
-    const std::optional<double> heading = headingFromBoxes(frame, box, 5);
-    guess.heading_rad = heading.value_or(0.0);
-    guess.heading_sd_rad = heading ? 0.5 : M_PI;
   }
   guess.stance_leg = options_.guess.stance_leg;
   return guess;
-}
-
-// The walking direction from the box nearest `box` `lookahead` frames later: the ground points
-// under the two boxes' bottoms. Empty when the person hardly moved or no box is near.
-std::optional<double> PersonStart::headingFromBoxes(int frame, const cv::Rect2d& box, int lookahead) const {
-  const auto later = boxes_.find(frame + lookahead);
-  if (later == boxes_.end()) return std::nullopt;
-  const cv::Rect2d* nearest = nullptr;
-  double best = 0.5 * box.height;  // a box further than half a body away is someone else
-  for (const auto& [candidate, score] : later->second) {
-    const double d = cv::norm(centre(candidate) - centre(box));
-    if (d < best) best = d, nearest = &candidate;
-  }
-  if (!nearest) return std::nullopt;
-  const Eigen::Vector2d from = kw::tracking::guessFromBox(camera_, ground_, box).position_m;
-  const Eigen::Vector2d to = kw::tracking::guessFromBox(camera_, ground_, *nearest).position_m;
-  if ((to - from).norm() < 0.15) return std::nullopt;
-  return std::atan2(to.y() - from.y(), to.x() - from.x());
 }
 
 }  // namespace kneed_walker::tools::track_offline

@@ -28,10 +28,9 @@ class PersonStart {
 
  private:
   using ScoredBoxes = std::vector<std::pair<cv::Rect2d, double>>;
-  // The guess from a box at `frame`: the feet under its bottom; the heading given, else from
-  // the nearest box 5 frames on, else unknown.
-  core::tracking::InitialGuess guessAt(const cv::Rect2d& box, int frame) const;
-  std::optional<double> headingFromBoxes(int frame, const cv::Rect2d& box, int lookahead) const;
+  // The guess from a box: the feet under its bottom; with the heading given, started at once,
+  // else from the person's ground track (InitialGuess::from_ground_track).
+  core::tracking::InitialGuess guessAt(const cv::Rect2d& box) const;
 
   const StartOptions& options_;
   const core::vision::Camera& camera_;
