@@ -101,7 +101,7 @@ bool SessionAnswer::started() const {
 }
 
 TrackingSession::TrackingSession(TrackerFactory make_tracker, const SessionOptions& options)
-    : make_tracker_(std::move(make_tracker)), options_(options) {
+    : make_tracker_(std::move(make_tracker)), options_(options), walker_finder_(options.heading_frames, options.min_walk_m) {
   if (!make_tracker_) throw std::invalid_argument("TrackingSession needs a tracker factory");
   common::throwIfInvalid("session options", validate(options));
   slots_.resize(options.max_people);
@@ -438,7 +438,7 @@ void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
   if (pending_guess_) {
     const InitialGuess guess = *pending_guess_;
     pending_guess_.reset();
-    sightings_.clear();
+    walker_finder_.clear();
     if (slots_[given].busy()) {
       const bool was_running = slots_[given].running();
       for (MapFrame& frame : endTrack(slots_[given], &people[given]))
@@ -478,12 +478,14 @@ void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
       }
       if (!free.empty()) {
         size_t next = 0;
-        for (const InitialGuess& guess : guessesFromSightings(std::move(found), input)) {
+        for (const person::FoundWalker& walker : walker_finder_.update(std::move(found), input, last_seen_m_)) {
           if (next == free.size()) break;
+          InitialGuess guess = foundPersonGuess(walker.person.ground_xy_m, walker.heading_rad, 0.5);
+          guess.from_ground_track = true;
           beginStart(free[next], bgr, stamp_s, input, guess, people[free[next]]);
           ++next;
         }
-        if (next == free.size()) sightings_.clear();
+        if (next == free.size()) walker_finder_.clear();
       }
     }
   }
@@ -607,38 +609,6 @@ std::vector<vision::PersonCandidate> TrackingSession::untrackedPeople(const cv::
   return untracked;
 }
 
-std::vector<InitialGuess> TrackingSession::guessesFromSightings(std::vector<vision::PersonCandidate> people, int input) {
-  std::vector<Sighting> now;
-  for (vision::PersonCandidate& person : people) now.push_back({input, std::move(person)});
-  while (!sightings_.empty() && (sightings_.front().empty() || sightings_.front().front().input < input - options_.heading_frames))
-    sightings_.pop_front();
-  sightings_.push_back(now);
-  if (sightings_.front().empty() || sightings_.front().front().input != input - options_.heading_frames) return {};
-  // Nearest first to where a lost track was last seen, else the largest first.
-  std::vector<const Sighting*> order;
-  for (const Sighting& s : now) order.push_back(&s);
-  if (last_seen_m_)
-    std::stable_sort(order.begin(), order.end(), [&](const Sighting* a, const Sighting* b) {
-      return (a->person.ground_xy_m - *last_seen_m_).norm() < (b->person.ground_xy_m - *last_seen_m_).norm();
-    });
-  std::vector<InitialGuess> guesses;
-  for (const Sighting* current : order) {
-    const cv::Point2d centre = (current->person.box_px.tl() + current->person.box_px.br()) * 0.5;
-    const Sighting* before = nullptr;
-    double nearest = 0.5 * current->person.box_px.height;  // further than half a body is someone else
-    for (const Sighting& old : sightings_.front()) {
-      const double d = cv::norm((old.person.box_px.tl() + old.person.box_px.br()) * 0.5 - centre);
-      if (d < nearest) nearest = d, before = &old;
-    }
-    if (!before) continue;
-    const Eigen::Vector2d walked = current->person.ground_xy_m - before->person.ground_xy_m;
-    if (walked.norm() < options_.min_walk_m) continue;
-    guesses.push_back(foundPersonGuess(current->person.ground_xy_m, std::atan2(walked.y(), walked.x()), 0.5));
-    guesses.back().from_ground_track = true;
-  }
-  return guesses;
-}
-
 std::vector<PersonAnswer> TrackingSession::finish() {
   std::vector<PersonAnswer> ended;
   for (int s = 0; s < static_cast<int>(slots_.size()); ++s) {
@@ -661,7 +631,7 @@ void TrackingSession::reset() {
   held_.clear();
   held_answers_.clear();
   pending_guess_.reset();
-  sightings_.clear();
+  walker_finder_.clear();
   last_seen_m_.reset();
   next_input_ = 0;
   if (!background_given_) background_ = vision::BackgroundModel{};

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "kneed_walker/core/person/ground_track.h"
+#include "kneed_walker/core/person/walker_finder.h"
 #include "kneed_walker/core/tracking/tracker.h"
 #include "kneed_walker/core/vision/person_detector.h"
 
@@ -182,10 +183,6 @@ class TrackingSession {
   double lastFrameMs() const { return last_frame_ms_; }
 
  private:
-  struct Sighting {
-    int input = 0;
-    vision::PersonCandidate person;
-  };
   // A frame held by a starting track.
   struct HeldFrame {
     cv::Mat bgr;
@@ -223,8 +220,6 @@ class TrackingSession {
   InitialGuess foundPersonGuess(const Eigen::Vector2d& position_m, double heading_rad, double heading_sd_rad) const;
   // The people found in the frame away from the running tracks.
   std::vector<vision::PersonCandidate> untrackedPeople(const cv::Mat& bgr) const;
-  // Guesses from the people seen now (untracked) and heading_frames ago.
-  std::vector<InitialGuess> guessesFromSightings(std::vector<vision::PersonCandidate> people, int input);
   // Begins the slot's track at this frame: its ground track starts at the guess. The particles
   // start when the window is full (finishStart), or at this frame's end for a guess that does
   // not wait.
@@ -260,7 +255,7 @@ class TrackingSession {
   std::vector<std::pair<cv::Mat, double>> held_;  // frames held to learn the background
   std::deque<SessionAnswer> held_answers_;         // answers held while a track starts
   std::optional<InitialGuess> pending_guess_;
-  std::deque<std::vector<Sighting>> sightings_;   // the people found in the last frames
+  person::WalkerFinder walker_finder_;             // people seen walking, away from the tracks
   std::optional<Eigen::Vector2d> last_seen_m_;    // where the last lost track last was
   int next_input_ = 0;
   int backlog_frames_ = 0;
