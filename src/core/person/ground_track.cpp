@@ -196,6 +196,24 @@ double GroundTrackEstimate::headingSdRad() const {
   return std::min(M_PI, std::sqrt(std::max(0.0, variance)));
 }
 
+WalkStart walkStart(const GroundTrackEstimate& at, double offset_sd_m) {
+  WalkStart start;
+  start.position_m = at.position();
+  start.position_covariance_m2 =
+      at.covariance.block<2, 2>(kX, kX) + offset_sd_m * offset_sd_m * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d velocity = at.velocity();
+  const double speed_mps = velocity.norm();
+  const Eigen::Vector2d along = speed_mps > 0 ? Eigen::Vector2d(velocity / speed_mps) : Eigen::Vector2d::UnitX();
+  const double speed_sd_mps = std::sqrt(std::max(0.0, along.dot(at.covariance.block<2, 2>(kVx, kVx) * along)));
+  start.speed_kmh = 3.6 * speed_mps;
+  start.speed_sd_kmh = 3.6 * speed_sd_mps;
+  if (speed_mps > 2 * speed_sd_mps) {
+    start.heading_rad = at.headingRad();
+    start.heading_sd_rad = std::max(at.headingSdRad(), kMinWalkStartHeadingSdRad);
+  }
+  return start;
+}
+
 GroundTracker::GroundTracker(const vision::Camera& camera, const vision::GroundPlane& ground,
                              const GroundTrackOptions& options, bool keep_history)
     : camera_(camera), ground_(ground), options_(options), keep_history_(keep_history) {

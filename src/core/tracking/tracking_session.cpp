@@ -12,11 +12,8 @@ namespace kneed_walker::core::tracking {
 
 namespace {
 
-// A track started from its ground track: the heading's spread at least this, rad (the walk's
-// direction wavers with each step about the ground track's mean).
-constexpr double kMinStartHeadingSdRad = 0.1;
-// ... and its gaits within the measured speed's 2-sd range widened by the gait table's speed
-// spacing, km/h.
+// A track started from its ground track walks the gaits within the measured speed's 2-sd range
+// widened by the gait table's speed spacing, km/h.
 constexpr double kStartSpeedMarginKmh = 0.5;
 
 }  // namespace
@@ -245,33 +242,24 @@ PersonAnswer& TrackingSession::heldPerson(int input, int body) {
 }
 
 InitialGuess TrackingSession::guessFromGroundTrack(InitialGuess guess, const person::GroundTrackEstimate& at) const {
-  // Where the person stood, the track's spread widened by the body's own offset from the
-  // silhouette's foot point; the direction and speed of their walk when the velocity tells it
-  // (its speed over twice its spread), else any heading at the guess's speeds.
-  guess.position_m = at.position();
-  const double offset_sd = options_.ground_track.near_foot_sd_m;
-  guess.position_covariance_m2 =
-      at.covariance.block<2, 2>(person::kX, person::kX) + offset_sd * offset_sd * Eigen::Matrix2d::Identity();
-  const Eigen::Vector2d velocity = at.velocity();
-  const double speed_mps = velocity.norm();
-  const Eigen::Vector2d along = speed_mps > 0 ? Eigen::Vector2d(velocity / speed_mps) : Eigen::Vector2d::UnitX();
-  const double speed_sd_mps =
-      std::sqrt(std::max(0.0, along.dot(at.covariance.block<2, 2>(person::kVx, person::kVx) * along)));
-  if (!(speed_mps > 2 * speed_sd_mps)) {
+  const person::WalkStart walk = person::walkStart(at, options_.ground_track.near_foot_sd_m);
+  guess.position_m = walk.position_m;
+  guess.position_covariance_m2 = walk.position_covariance_m2;
+  if (!walk.heading_rad) {  // any heading, at the guess's speeds
     guess.heading_sd_rad = M_PI;
     return guess;
   }
-  guess.heading_rad = at.headingRad();
-  guess.heading_sd_rad = std::max(at.headingSdRad(), kMinStartHeadingSdRad);
+  guess.heading_rad = *walk.heading_rad;
+  guess.heading_sd_rad = walk.heading_sd_rad;
   // The gaits within the speed's 2-sd range and a gait spacing on either side, among the
   // guess's; a speed outside the guess's takes its nearest.
-  const double speed_kmh = 3.6 * speed_mps, reach_kmh = 3.6 * 2 * speed_sd_mps + kStartSpeedMarginKmh;
-  const double low = std::max(guess.min_speed_kmh, speed_kmh - reach_kmh);
-  const double high = std::min(guess.max_speed_kmh, speed_kmh + reach_kmh);
+  const double reach_kmh = 2 * walk.speed_sd_kmh + kStartSpeedMarginKmh;
+  const double low = std::max(guess.min_speed_kmh, walk.speed_kmh - reach_kmh);
+  const double high = std::min(guess.max_speed_kmh, walk.speed_kmh + reach_kmh);
   if (low <= high) {
     guess.min_speed_kmh = low, guess.max_speed_kmh = high;
   } else {
-    guess.min_speed_kmh = guess.max_speed_kmh = std::clamp(speed_kmh, guess.min_speed_kmh, guess.max_speed_kmh);
+    guess.min_speed_kmh = guess.max_speed_kmh = std::clamp(walk.speed_kmh, guess.min_speed_kmh, guess.max_speed_kmh);
   }
   return guess;
 }

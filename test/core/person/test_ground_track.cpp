@@ -238,5 +238,29 @@ TEST(GroundTrack, RefusesBadOptionsByName) {
   EXPECT_THROW(GroundTracker(vision::Camera::load(kRobotEyeCamera, 0.001), {}, options), std::invalid_argument);
 }
 
+// A start from the ground track: its position with the body's offset spread added; the walk's
+// heading (spread at least kMinWalkStartHeadingSdRad) and speed when the velocity is over twice
+// its spread, else no heading.
+TEST(GroundTrack, AWalkStartTakesTheHeadingOnlyWhenTheVelocityTellsIt) {
+  GroundTrackEstimate at;
+  at.mean << 2.0, 3.0, 0.0, 1.2, 1.7;
+  at.covariance = GroundTrackMatrix::Identity() * 1e-4;
+  at.covariance(kX, kX) = 0.04;
+  at.covariance(kVy, kVy) = 0.01;  // 0.1 m/s along the walk
+  const WalkStart walking = walkStart(at, 0.06);
+  EXPECT_EQ(walking.position_m, Eigen::Vector2d(2.0, 3.0));
+  EXPECT_NEAR(walking.position_covariance_m2(0, 0), 0.04 + 0.0036, 1e-12);
+  EXPECT_NEAR(walking.position_covariance_m2(1, 1), 1e-4 + 0.0036, 1e-12);
+  ASSERT_TRUE(walking.heading_rad.has_value());
+  EXPECT_NEAR(*walking.heading_rad, M_PI / 2, 1e-12);
+  EXPECT_GE(walking.heading_sd_rad, kMinWalkStartHeadingSdRad);
+  EXPECT_NEAR(walking.speed_kmh, 3.6 * 1.2, 1e-12);
+  EXPECT_NEAR(walking.speed_sd_kmh, 3.6 * 0.1, 1e-12);
+  at.covariance(kVy, kVy) = 0.49;  // 0.7 m/s: 1.2 m/s is under twice that
+  const WalkStart unsure = walkStart(at, 0.06);
+  EXPECT_FALSE(unsure.heading_rad.has_value());
+  EXPECT_EQ(unsure.heading_sd_rad, M_PI);
+}
+
 }  // namespace
 }  // namespace kneed_walker::core::person

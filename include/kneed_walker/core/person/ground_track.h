@@ -30,6 +30,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -116,6 +117,22 @@ struct GroundTrackEstimate {
   double headingRad() const;  // of the velocity, from +X towards +Y
   double headingSdRad() const;  // from the velocity's covariance (π when the speed is unknown)
 };
+
+// Where a person's walkers start from their ground track at one frame (TrackingSession's start
+// after SessionOptions::start_window_s): where they stood, the estimate's spread widened by the
+// body's own offset from the silhouette's foot point (`offset_sd_m`), and which way and how fast
+// they walked when the velocity tells it (its speed over twice its spread along it).
+struct WalkStart {
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d position_covariance_m2 = Eigen::Matrix2d::Identity();
+  std::optional<double> heading_rad;  // none when the velocity does not tell the direction
+  double heading_sd_rad = M_PI;       // at least kMinWalkStartHeadingSdRad
+  double speed_kmh = 0, speed_sd_kmh = 0;
+};
+// The walk's direction wavers with each step about the ground track's mean: a start's heading
+// spread is at least this, rad.
+constexpr double kMinWalkStartHeadingSdRad = 0.1;
+WalkStart walkStart(const GroundTrackEstimate& at, double offset_sd_m);
 
 class GroundTracker {
  public:

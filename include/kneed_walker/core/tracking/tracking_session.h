@@ -236,8 +236,8 @@ class TrackingSession {
   std::vector<MapFrame> endTrack(Slot& slot, PersonAnswer* person = nullptr);
   // Ends the slot's walkers (its tracker's track), keeping its ground track: the rest of their MAP frames.
   std::vector<MapFrame> endWalker(Slot& slot);
-  // `guess` moved to a ground track's estimate: its position and spread, its walking direction
-  // and speed when its velocity tells them.
+  // `guess` moved to a ground track's estimate (person::walkStart): its position and spread, its
+  // walking direction and speed when its velocity tells them.
   InitialGuess guessFromGroundTrack(InitialGuess guess, const person::GroundTrackEstimate& at) const;
   // The slot's ground track's step at this frame, into `person`.
   void trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person);
