@@ -213,7 +213,6 @@ void TrackingSession::beginStart(int s, const cv::Mat& bgr, double stamp_s, int 
   slot.ground_inputs.clear();
   slot.start = std::move(start);
   trackGround(slot, bgr, stamp_s, input, person);
-  person.starting = true;
   if (startDue(slot)) return;  // at this frame's end
   char text[160];
   std::snprintf(text, sizeof text, "starting at (%.2f, %.2f) m: watching the person's ground track for %.1f s",
@@ -232,13 +231,10 @@ PersonAnswer& TrackingSession::heldPerson(int input, int body) {
   const auto answer = std::find_if(held_answers_.begin(), held_answers_.end(),
                                    [&](const SessionAnswer& a) { return a.input == input; });
   if (answer == held_answers_.end()) throw std::logic_error("no held answer for input " + std::to_string(input));
-  auto at = std::find_if(answer->people.begin(), answer->people.end(), [&](const PersonAnswer& p) { return p.body >= body; });
-  if (at == answer->people.end() || at->body != body) {
-    PersonAnswer person;
-    person.body = body;
-    at = answer->people.insert(at, std::move(person));
-  }
-  return *at;
+  const auto person = std::find_if(answer->people.begin(), answer->people.end(),
+                                   [&](const PersonAnswer& p) { return p.body == body; });
+  if (person == answer->people.end()) throw std::logic_error("no held answer for body " + std::to_string(body));
+  return *person;
 }
 
 InitialGuess TrackingSession::guessFromGroundTrack(InitialGuess guess, const person::GroundTrackEstimate& at) const {
@@ -270,7 +266,6 @@ void TrackingSession::finishStart(int s) {
   slot.start.reset();
   const std::vector<HeldFrame>& frames = start.frames;
   const int n = static_cast<int>(frames.size()), body = s + 1;
-  for (const HeldFrame& frame : frames) heldPerson(frame.input, body).starting = false;
   // The ground track over the held frames, smoothed: at each, what the whole window saw.
   const std::vector<person::GroundTrackEstimate> ground = slot.ground->smoothed();
   if (static_cast<int>(ground.size()) != n) throw std::logic_error("a starting track's ground track lost frames");
@@ -386,7 +381,6 @@ void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
     PersonAnswer& person = people[s];
     if (slot.start) {
       trackGround(slot, bgr, stamp_s, input, person);
-      person.starting = true;
       continue;
     }
     if (!slot.running()) continue;
@@ -478,31 +472,29 @@ void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
     }
   }
 
+  // A starting track's person has their ground track and no estimate yet.
   for (PersonAnswer& person : people)
-    if (person.estimate || person.ended || person.starting) answer.people.push_back(std::move(person));
+    if (person.estimate || person.ended || person.ground_track) answer.people.push_back(std::move(person));
   describe(answer);
   held_answers_.push_back(std::move(answer));
   // The starts due: a guess that does not wait, a full window.
   for (int s = 0; s < slots; ++s)
     if (startDue(slots_[s])) finishStart(s);
   state_ = held_answers_.back().state;
+  if (state_ != SessionState::kTracking &&
+      std::any_of(slots_.begin(), slots_.end(), [](const Slot& slot) { return slot.start.has_value(); }))
+    state_ = SessionState::kStartingTrack;
   last_frame_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - began).count();
 }
 
 void TrackingSession::describe(SessionAnswer& answer) const {
-  bool tracking = false, lost = false, starting = false;
-  for (const PersonAnswer& person : answer.people) {
+  bool tracking = false, lost = false;
+  for (const PersonAnswer& person : answer.people)
     if (person.estimate) (person.estimate->lost ? lost : tracking) = true;
-    starting = starting || person.starting;
-  }
-  answer.state = tracking   ? SessionState::kTracking
-                 : starting ? SessionState::kStartingTrack
-                 : lost     ? SessionState::kLost
-                            : SessionState::kWaitingForPerson;
+  answer.state = tracking ? SessionState::kTracking : lost ? SessionState::kLost : SessionState::kWaitingForPerson;
   if (answer.start_failed) return;
   switch (answer.state) {
     case SessionState::kTracking: answer.message.clear(); break;
-    case SessionState::kStartingTrack: answer.message = "starting a track: watching the person's ground track"; break;
     case SessionState::kLost: answer.message = "lost: looking for people again"; break;
     default: answer.message = options_.find_people ? "looking for a walking person" : "waiting for the person's box";
   }

@@ -88,7 +88,7 @@ std::vector<std::string> validate(const SessionOptions& options);
 enum class SessionState {
   kLearningBackground,  // frames are held until the background is learned
   kWaitingForPerson,    // nobody is tracked: no guess or box given and nobody found yet
-  kStartingTrack,       // a track is starting: frames are held while its ground track watches the person
+  kStartingTrack,       // (state() only) a track is starting: its frames are held while its ground track watches the person
   kTracking,            // someone is tracked at this frame
   kLost,                // every track was lost at this frame; people are looked for again
 };
@@ -106,10 +106,6 @@ struct MapFrame {
 struct PersonAnswer {
   int body = 1;          // the slot, 1..max_people: the REP 155 body id
   bool started = false;  // a track started in this slot at this frame
-  // The slot's person is watched by their ground track before their track starts
-  // (SessionOptions::start_window_s): the answer has the ground track and no estimate. Answers
-  // are held while a track starts, so this is seen only when the input ends first.
-  bool starting = false;
   // The slot's track ended at this frame (lost, merged into an older track, replaced by a given
   // guess); a track started at the same frame is a new one.
   bool ended = false;
@@ -230,7 +226,7 @@ class TrackingSession {
   // their held answers (a track lost among them starts again at the next from the ground track).
   // A guess that cannot start a track: the last held answer says why.
   void finishStart(int slot);
-  // The slot's person in the held answer of an input (added when missing).
+  // The slot's person in the held answer of an input.
   PersonAnswer& heldPerson(int input, int body);
   // Ends the slot's track: the rest of its MAP frames; its smoothed ground track into `person`.
   std::vector<MapFrame> endTrack(Slot& slot, PersonAnswer* person = nullptr);
