@@ -13,7 +13,10 @@
 //                            signed error of the waist's distance to the camera (positive: the
 //                            body placed too far), and lateral_error_mm= the mean error of the
 //                            waist across the camera's horizontal line of sight to it: depth and
-//                            sideways errors told apart (from a low camera depth is the weak one)
+//                            sideways errors told apart (from a low camera depth is the weak one);
+//                            range_error_mm= the median |error| of the waist's ground point's
+//                            distance from the camera's (and _p95_mm=, and as a share of the
+//                            distance, range_error_percent=), as the ground track's below
 //   footskate_mm=            mean slip of the estimated stance foot along the ground between
 //                            adjacent frames: the walker's rolling foot, recovered from knee and
 //                            ankle (body::rollingFoot; sized by the estimate's own thighs, the
@@ -289,6 +292,7 @@ int main(int argc, char** argv) {
     // The waist's error along and across the camera's horizontal line of sight to the truth.
     double depth_sum = 0, lateral_sum = 0;
     int sight_frames = 0;
+    std::vector<double> range_abs, range_share;  // the waist's ground point's distance from the camera's
     if (!ground_path.empty()) {
       const Eigen::Vector3d camera = kneed_walker::tools::loadCamera("evaluate", ground_path, camera_unit_m).centre();
       for (const auto& [frame, t] : truth) {
@@ -301,6 +305,9 @@ int main(int argc, char** argv) {
         const Eigen::Vector2d error = (estimated_waist - true_waist).head<2>();
         lateral_sum += std::abs(sight.x() * error.y() - sight.y() * error.x());
         ++sight_frames;
+        const double true_range = (true_waist - camera).head<2>().norm();
+        range_abs.push_back(std::abs((estimated_waist - camera).head<2>().norm() - true_range));
+        range_share.push_back(range_abs.back() / true_range);
       }
     }
     // Foot skate and penetration, of the estimate and (for reference) of the truth. The truth's
@@ -383,8 +390,11 @@ int main(int argc, char** argv) {
     std::printf("root_relative_error_mm=%.1f\n", 1000 * root_sum / count);
     std::printf("lost_frames=%d\n", lost);
     if (sight_frames > 0)
-      std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\n", 1000 * depth_sum / sight_frames,
-                  1000 * lateral_sum / sight_frames);
+      std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\nrange_error_mm=%.1f\nrange_error_p95_mm=%.1f\n"
+                  "range_error_percent=%.2f\n",
+                  1000 * depth_sum / sight_frames, 1000 * lateral_sum / sight_frames,
+                  1000 * kneed_walker::tools::median(range_abs), 1000 * kneed_walker::tools::percentile(range_abs, 95),
+                  100 * kneed_walker::tools::median(range_share));
     // The estimate's walking direction 1 s after its first frame against the truth's, each its
     // waist's over ±0.5 s: over 90° is a track that started on the mirrored heading.
     {
