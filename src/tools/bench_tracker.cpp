@@ -3,8 +3,11 @@
 // `--fps` frames per second, starting on the ground under `--start-pixel`: the person's image
 // height there is printed as person_px=, since the likelihood's cost grows with the rows a body
 // covers), learns its background, then tracks it from a coarse start with
-// `--particles` particles on 1 thread and on all cores. Prints medians over the tracked frames:
-//   tracker_ms_per_frame=       wall time per frame
+// `--particles` particles on 1 thread and on all cores, held to the person's ground track as a
+// session holds them (person/ground_track.h, updated each frame). Prints medians over the
+// tracked frames:
+//   tracker_ms_per_frame=       wall time per frame, the ground track's update included
+//   ground_track_ms=            of which the ground track's update (per person, not per particle)
 //   per_frame_precompute_ms=    the frame's shared evidence (ratio maps, prefix sums, flow)
 //   dynamics_ms= likelihood_ms= thread time per frame in the prior's transitions and in pose +
 //                               projection + likelihood, summed over threads
@@ -24,11 +27,13 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <numeric>
 #include <vector>
 
 #include "kneed_walker/core/common/parallel.h"
+#include "kneed_walker/core/person/ground_track.h"
 #include "kneed_walker/core/synthetic/synthetic_scene.h"
 #include "kneed_walker/core/tracking/tracker.h"
 #include "median.h"
@@ -111,14 +116,19 @@ int main(int argc, char** argv) {
       options.filter.num_threads = threads;
       kw::tracking::Tracker tracker(camera, walk.ground, table, prior, options);
       tracker.setBackground(background);
-      std::vector<double> total, precompute, dynamics, likelihood, resample, per_particle, dynamics_per_particle;
+      kw::person::GroundTracker ground_track(camera, walk.ground, {}, false);
+      ground_track.start(guess.position_m, std::nullopt, 0.0);
+      std::vector<double> total, ground_ms, precompute, dynamics, likelihood, resample, per_particle, dynamics_per_particle;
       int resampled = 0;
-      tracker.start(images[0], 0.0, guess);
+      tracker.start(images[0], 0.0, guess, &ground_track.update(images[0], background, 0.0));
       const double start_ms = tracker.timing().total_ms;
       for (size_t i = 1; i < images.size(); ++i) {
-        resampled += tracker.track(images[i], i / fps).resampled;
+        const auto ground_start = std::chrono::steady_clock::now();
+        const kw::person::GroundTrackEstimate& ground = ground_track.update(images[i], background, i / fps);
+        ground_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ground_start).count());
+        resampled += tracker.track(images[i], i / fps, &ground).resampled;
         const kw::tracking::TrackerTiming& t = tracker.timing();
-        total.push_back(t.total_ms);
+        total.push_back(ground_ms.back() + t.total_ms);
         precompute.push_back(t.precompute_ms);
         dynamics.push_back(t.dynamics_cpu_ms);
         likelihood.push_back(t.likelihood_cpu_ms);
@@ -126,10 +136,10 @@ int main(int argc, char** argv) {
         per_particle.push_back(1e3 * t.likelihood_cpu_ms / std::max(1, t.particle_steps));
         dynamics_per_particle.push_back(1e3 * t.dynamics_cpu_ms / std::max(1, t.particle_steps));
       }
-      std::printf("threads=%d tracker_ms_per_frame=%.1f per_frame_precompute_ms=%.1f dynamics_ms=%.1f "
+      std::printf("threads=%d tracker_ms_per_frame=%.1f ground_track_ms=%.2f per_frame_precompute_ms=%.1f dynamics_ms=%.1f "
                   "likelihood_ms=%.1f resample_ms=%.1f likelihood_us_per_particle=%.2f "
                   "dynamics_us_per_particle=%.2f resampled_frames=%d/%zu mean_ms=%.1f p95_ms=%.1f start_ms=%.0f\n",
-                  threads, median(total), median(precompute), median(dynamics), median(likelihood), median(resample),
+                  threads, median(total), median(ground_ms), median(precompute), median(dynamics), median(likelihood), median(resample),
                   median(per_particle), median(dynamics_per_particle), resampled, total.size(),
                   std::accumulate(total.begin(), total.end(), 0.0) / total.size(), percentile(total, 95), start_ms);
     }
