@@ -160,6 +160,7 @@ class TrackerNodelet : public nodelet::Nodelet {
   double last_effective_sample_size_ = 0, last_processing_s_ = 0;
   int num_particles_ = 0, people_tracked_ = 0;
   uint64_t tracks_started_ = 0;
+  uint64_t tracks_started_again_ = 0;  // of them, a body's second or later track (its pose jumps)
   std::string state_name_ = "waiting for frames", last_problem_;
 };
 
@@ -507,7 +508,10 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
       num_particles_ = first->num_particles;
     }
     people_tracked_ = session_->trackCount();
-    for (const kw::tracking::PersonAnswer& person : answer.people) tracks_started_ += person.started;
+    for (const kw::tracking::PersonAnswer& person : answer.people) {
+      tracks_started_ += person.started;
+      tracks_started_again_ += person.started && person.track > 1;
+    }
   }
   if (answer.start_failed) NODELET_ERROR("frame at %.3f s: %s", header.stamp.toSec(), answer.message.c_str());
   for (const kw::tracking::PersonAnswer& person : answer.people)
@@ -537,6 +541,7 @@ void TrackerNodelet::publishAnswer(const kw::tracking::SessionAnswer& answer, co
     const std::string id = std::to_string(person.body);
     poses->bodies.push_back(toBodyPose(estimate, header, id, tracker.imageBox(estimate.pose),
                                        cv::Size(tracker.camera().width(), tracker.camera().height())));
+    poses->bodies.back().track = static_cast<uint32_t>(person.track);
     body_pose_publisher_.publish(boost::make_shared<BodyPose>(poses->bodies.back()));
     pose_publisher_.publish(boost::make_shared<geometry_msgs::PoseWithCovarianceStamped>(toPose(estimate, header)));
     walker_state_publisher_.publish(boost::make_shared<WalkerState>(toWalkerState(estimate, header)));
@@ -602,6 +607,7 @@ void TrackerNodelet::publishSmoothed(const kw::tracking::SessionAnswer& answer) 
       poses->bodies.push_back(toBodyPose(frame.pose, poses->header, std::to_string(person.body),
                                          tracker.imageBox(frame.pose),
                                          cv::Size(tracker.camera().width(), tracker.camera().height())));
+      poses->bodies.back().track = static_cast<uint32_t>(frame.track);
       if (publishing_.publish_tf)
         tf_broadcaster_->sendTransform(toTransforms(frame.pose, std::atan2(frame.pose.forward.y(), frame.pose.forward.x()),
                                                     poses->header, std::to_string(person.body) + "_smoothed"));
@@ -644,6 +650,7 @@ void TrackerNodelet::publishStatus(const std_msgs::Header& header, uint8_t state
     status->frames_skipped = frames_skipped_;
     status->frames_dropped = frames_dropped_;
     status->frames_answered = frames_answered_;
+    status->tracks_started_again = tracks_started_again_;
   }
   status->message = message;
   status_publisher_.publish(status);
@@ -665,6 +672,7 @@ void TrackerNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapp
   status.add("particles per person", num_particles_);
   status.add("people tracked", people_tracked_);
   status.add("tracks started", tracks_started_);
+  status.add("tracks started again on a body (lost and started again: its pose jumps)", tracks_started_again_);
   status.add("input", camera_subscriber_.getTopic());
 }
 

@@ -1,8 +1,9 @@
 // track_offline: the tracker (paper §4) on a recorded sequence, frame by frame, deterministic for
 // a seed: a rosbag (image + camera_info topics; the camera's pose from /tf_static or a camera
 // file) or a video with a camera file; one person, or up to --max-people at once. Writes the MAP
-// joints per frame and body as CSV `frame,stamp,joint,x,y,z,body` (the synthetic ground truth's
-// format, and the REP 155 body id): by default each track's whole MAP state sequence, one
+// joints per frame and body as CSV `frame,stamp,joint,x,y,z,body,track` (the synthetic ground
+// truth's format, the REP 155 body id, and the body's track: a new number where it started
+// again, its pose jumping there): by default each track's whole MAP state sequence, one
 // particle's path written when the track ends (--lagged: each frame Δs frames later, as the
 // nodelet; --filtered: each frame's best particle at once), optionally an overlay video and the
 // projected body's image box per frame (for comparing with a person detector's boxes:

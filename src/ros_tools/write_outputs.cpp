@@ -1,6 +1,6 @@
 // write_outputs: a node that writes what the tracker nodelet publishes into files, for a run
 // through track.launch (its out_dir argument; scripts/demo): every tracked person's joints
-// from ~body_poses as CSV `frame,stamp,joint,x,y,z,body` (track_offline's format), the smoothed
+// from ~body_poses as CSV `frame,stamp,joint,x,y,z,body,track` (track_offline's format), the smoothed
 // ones from ~body_poses_smoothed as joints_smoothed.csv (as track_offline --lagged writes them),
 // their image boxes as `frame,x1,y1,x2,y2,body` (for scripts/box_overlap), and ~overlay as an
 // MJPG video;
@@ -147,9 +147,9 @@ class OutputWriter {
 
  private:
   using PosesByStamp = std::map<ros::Time, kneed_walker::BodyPoseArray>;
-  // Joints as `frame,stamp,joint,x,y,z,body`, in order of frame and body; returns the poses written.
+  // Joints as `frame,stamp,joint,x,y,z,body,track`, in order of frame and body; returns the poses written.
   int writeJoints(std::ofstream& csv, const PosesByStamp& poses, double fps) const {
-    csv << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+    csv << "frame,stamp,joint,x,y,z,body,track\n" << std::fixed << std::setprecision(9);
     int bodies = 0;
     for (const auto& [stamp, array] : poses) {
       const long frame = frameOf(stamp, fps);
@@ -158,7 +158,7 @@ class OutputWriter {
         for (size_t j = 0; j < body.joint_names.size() && j < body.joint_positions.size(); ++j) {
           const geometry_msgs::Point& p = body.joint_positions[j];
           csv << frame << ',' << stamp.toSec() << ',' << body.joint_names[j] << ',' << p.x << ',' << p.y << ','
-              << p.z << ',' << body.body_id << '\n';
+              << p.z << ',' << body.body_id << ',' << body.track << '\n';
         }
       }
     }

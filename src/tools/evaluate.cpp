@@ -1,7 +1,9 @@
 // evaluate: accuracy of a tracked sequence against ground truth, both as CSV
-// `frame,stamp,joint,x,y,z[,body]` (world frame, metres; make_synthetic's ground truth and
+// `frame,stamp,joint,x,y,z[,body[,track]]` (world frame, metres; make_synthetic's ground truth and
 // track_offline's estimate, whose body column is the REP 155 body id: one body is evaluated,
-// --body when the file has several). Prints, over the frames and REP 155 joints present in both:
+// --body when the file has several; its track column numbers the body's tracks, and adjacent
+// frames of two tracks, a restart's jump, are not joined). Prints, over the frames and REP 155
+// joints present in both:
 //   mean_joint_error_mm=     mean Euclidean joint error, world frame (MPJPE, global)
 //   root_relative_error_mm=  the same with each pose's mid-hip (waist) subtracted
 //   estimated_frames=N/M     the truth's frames that the estimate has (the figures are over them)
@@ -91,32 +93,38 @@ std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const k
   return std::isfinite(height_m) && height_m > 0 ? std::optional<double>(height_m) : std::nullopt;
 }
 
-// The poses of one body: `body` (empty: the file's only one); each frame's stamp into `stamps`.
-std::map<int, Pose> readPoses(const std::string& path, const std::string& body, std::map<int, double>* stamps = nullptr) {
+// The poses of one body: `body` (empty: the file's only one); each frame's stamp into `stamps`,
+// and with a track column (track_offline's), each frame's track of the body into `tracks`.
+std::map<int, Pose> readPoses(const std::string& path, const std::string& body, std::map<int, double>* stamps = nullptr,
+                              std::map<int, int>* tracks = nullptr) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot read");
   std::string line;
   if (!std::getline(in, line) || line.rfind("frame,stamp,joint,x,y,z", 0) != 0)
-    throw std::runtime_error(path + ": not a pose CSV (header frame,stamp,joint,x,y,z[,body])");
+    throw std::runtime_error(path + ": not a pose CSV (header frame,stamp,joint,x,y,z[,body[,track]])");
   const bool has_bodies = line.rfind("frame,stamp,joint,x,y,z,body", 0) == 0;
+  const bool has_tracks = line.rfind("frame,stamp,joint,x,y,z,body,track", 0) == 0;
   std::map<std::string, std::map<int, Pose>> bodies;
+  std::map<std::string, std::map<int, int>> body_tracks;
   int number = 1;
   while (std::getline(in, line)) {
     ++number;
     if (line.empty()) continue;
     std::istringstream fields(line);
-    std::string frame, stamp, joint, x, y, z, id;
+    std::string frame, stamp, joint, x, y, z, id, track;
     if (!std::getline(fields, frame, ',') || !std::getline(fields, stamp, ',') || !std::getline(fields, joint, ',') ||
         !std::getline(fields, x, ',') || !std::getline(fields, y, ',') || !std::getline(fields, z, ',') ||
-        (has_bodies && (!std::getline(fields, id, ',') || id.empty())))
+        (has_bodies && (!std::getline(fields, id, ',') || id.empty())) ||
+        (has_tracks && (!std::getline(fields, track, ',') || track.empty())))
       throw std::runtime_error(path + ":" + std::to_string(number) + ": expected frame,stamp,joint,x,y,z" +
-                               (has_bodies ? ",body" : ""));
+                               (has_tracks ? ",body,track" : has_bodies ? ",body" : ""));
     Eigen::Vector3d p;
     int frame_number = 0;
     try {
       p = Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z));
       frame_number = std::stoi(frame);
       if (stamps) (*stamps)[frame_number] = std::stod(stamp);
+      if (has_tracks) body_tracks[id][frame_number] = std::stoi(track);
       if (!p.allFinite()) throw std::invalid_argument("not finite");
     } catch (const std::exception&) {
       throw std::runtime_error(path + ":" + std::to_string(number) + ": not numbers: " + line);
@@ -133,10 +141,13 @@ std::map<int, Pose> readPoses(const std::string& path, const std::string& body, 
   if (!body.empty() && has_bodies) {
     const auto it = bodies.find(body);
     if (it == bodies.end()) throw std::runtime_error("--body " + body + ": " + path + " has bodies " + ids);
+    if (tracks) *tracks = body_tracks[body];
     return it->second;
   }
   if (bodies.size() > 1) throw std::runtime_error(path + " has bodies " + ids + ": choose one with --body");
-  return bodies.empty() ? std::map<int, Pose>{} : bodies.begin()->second;
+  if (bodies.empty()) return {};
+  if (tracks) *tracks = body_tracks[bodies.begin()->first];
+  return bodies.begin()->second;
 }
 
 struct GroundTrackRow {
@@ -258,7 +269,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     std::map<int, double> truth_stamps;
-    const auto truth = readPoses(truth_path, "", &truth_stamps), estimate = readPoses(estimate_path, body);
+    std::map<int, int> estimate_tracks;  // a frame's track of the body: poses of two tracks are not joined
+    const auto truth = readPoses(truth_path, "", &truth_stamps), estimate = readPoses(estimate_path, body, nullptr, &estimate_tracks);
     const kw::vision::GroundPlane ground = ground_path.empty() ? kw::vision::GroundPlane{} : kw::vision::loadGroundPlane(ground_path);
     std::map<std::string, std::pair<double, int>> per_joint;
     double sum = 0, root_sum = 0;
@@ -323,7 +335,12 @@ int main(int argc, char** argv) {
       std::optional<double> skate_mm, penetration_mm, lean_deg, knee_at_contact_deg;
       int landings = 0;
     };
-    auto contact = [&](const std::map<int, Pose>& poses, const kw::body::FootGeometry& foot) {
+    auto contact = [&](const std::map<int, Pose>& poses, const kw::body::FootGeometry& foot,
+                       const std::map<int, int>& tracks) {
+      const auto same_track = [&](int a, int b) {
+        const auto i = tracks.find(a), j = tracks.find(b);
+        return i == tracks.end() || j == tracks.end() || i->second == j->second;
+      };
       double skate = 0, penetration = 0, lean = 0, knee_at_contact = 0;
       int skate_count = 0, penetration_count = 0, lean_count = 0, landings = 0;
       struct Feet {
@@ -355,7 +372,7 @@ int main(int argc, char** argv) {
           lean += kw::body::torsoLeanRad(pose.at("waist"), pose.at("neck"), heading);
           ++lean_count;
         }
-        if (frame == previous.frame + 1) {
+        if (frame == previous.frame + 1 && same_track(frame, previous.frame)) {
           for (int side : {0, 1})
             if (now.on_ground[side] && !previous.on_ground[side]) {
               knee_at_contact += kw::body::kneeFlexionRad(pose.at(kJoints[side][2]), pose.at(kJoints[side][0]),
@@ -383,7 +400,8 @@ int main(int argc, char** argv) {
       return Contact{mean(skate, skate_count, 1000), mean(penetration, penetration_count, 1000),
                      mean(lean, lean_count, kDeg), mean(knee_at_contact, landings, kDeg), landings};
     };
-    const Contact estimated = contact(estimate, estimated_foot), true_contact = contact(truth, true_foot);
+    const Contact estimated = contact(estimate, estimated_foot, estimate_tracks),
+                  true_contact = contact(truth, true_foot, {});
     std::printf("frames=%d joints=%d\n", frames, count / frames);
     std::printf("estimated_frames=%d/%zu\n", frames, truth.size());
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);

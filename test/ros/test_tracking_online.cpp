@@ -201,6 +201,9 @@ TEST(TrackingOnline, AnswersEveryFrameMatchesTrackOfflineStaysNearTheTruthAndTra
     ASSERT_EQ(array->second.bodies.size(), 1u) << "frame " << f;
     EXPECT_EQ(array->second.bodies[0].body_id, "1");
     EXPECT_EQ(array->second.bodies[0].joint_positions, pose->second.joint_positions) << "frame " << f;
+    // Its track: the same as track_offline's at the frame (a new one where a lost person started again).
+    EXPECT_GE(pose->second.track, 1u) << "frame " << f;
+    EXPECT_EQ(pose->second.track, static_cast<uint32_t>(offline_by_frame[f].at("waist")->track)) << "frame " << f;
     // ~ground_tracks: the same body's ground track, in the world frame, near the true waist's
     // ground point, with a positive covariance.
     const auto ground = ground_tracks.find(images[f]->header.stamp);

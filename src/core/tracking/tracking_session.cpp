@@ -307,6 +307,7 @@ void TrackingSession::finishStart(int s) {
         break;
       }
       slot.started_input = frames[k].input;
+      ++slot.track;
       person.started = true;
       char text[260];
       std::snprintf(text, sizeof text, "%sstarted at (%.2f, %.2f) m, heading %s, %.2f m tall%s%s",
@@ -321,6 +322,7 @@ void TrackingSession::finishStart(int s) {
     slot.track_inputs.emplace_back(frames[k].input, frames[k].stamp_s);
     collectMapFrames(slot, person);
     person.estimate = estimate;
+    person.track = slot.track;
     if (estimate.lost) {
       last_seen_m_ = estimate.pose.joints[body::kWaist].head<2>();
       const bool last = k + 1 == n;
@@ -390,6 +392,7 @@ void TrackingSession::process(const cv::Mat& bgr, double stamp_s, int input) {
     slot.track_inputs.emplace_back(input, stamp_s);
     collectMapFrames(slot, person);
     person.estimate = estimate;
+    person.track = slot.track;
     if (estimate.lost) {
       last_seen_m_ = waist(s);
       for (MapFrame& frame : endTrack(slot, &person)) person.map_frames.push_back(std::move(frame));
@@ -511,7 +514,7 @@ void TrackingSession::collectMapFrames(Slot& slot, PersonAnswer& person) {
   if (frames.front() <= slot.map_written) return;
   slot.map_written = frames.front();
   const auto& [input, stamp] = slot.track_inputs.at(frames.front());
-  person.map_frames.push_back({input, stamp, poses.front()});
+  person.map_frames.push_back({input, stamp, poses.front(), slot.track});
 }
 
 void TrackingSession::trackGround(Slot& slot, const cv::Mat& bgr, double stamp_s, int input, PersonAnswer& person) {
@@ -546,7 +549,7 @@ std::vector<MapFrame> TrackingSession::endWalker(Slot& slot) {
     for (size_t i = 0; i < frames.size(); ++i) {
       if (frames[i] <= slot.map_written) continue;
       const auto& [input, stamp] = slot.track_inputs.at(frames[i]);
-      rest.push_back({input, stamp, poses[i]});
+      rest.push_back({input, stamp, poses[i], slot.track});
     }
     slot.tracker->stop();
   }

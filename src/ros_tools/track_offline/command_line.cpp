@@ -64,7 +64,7 @@ void addStartOptions(CLI::App& app, StartOptions& start, std::string& stance) {
 }
 
 void addOutputOptions(CLI::App& app, OutputOptions& output, bool& filtered, bool& lagged) {
-  app.add_option("--out-csv", output.csv_path, "MAP joints per frame and body (frame,stamp,joint,x,y,z,body)")->required();
+  app.add_option("--out-csv", output.csv_path, "MAP joints per frame and body (frame,stamp,joint,x,y,z,body,track)")->required();
   app.add_option("--overlay", output.overlay_path, "overlay video (MJPG .avi)");
   app.add_option("--strip", output.strip_path,
                  "a picture of the overlay at --strip-frames, each cropped around the tracked body, side by side (PNG)");

@@ -31,7 +31,7 @@ const Outputs::File& Outputs::add(const std::string& option, const std::string& 
 
 Outputs::Outputs(const OutputOptions& options) : options_(options) {
   csv_.open(add("--out-csv", options.csv_path).temporary);
-  csv_ << "frame,stamp,joint,x,y,z,body\n" << std::fixed << std::setprecision(9);
+  csv_ << "frame,stamp,joint,x,y,z,body,track\n" << std::fixed << std::setprecision(9);
   if (!options.boxes_path.empty()) {
     boxes_csv_.open(add("--out-boxes", options.boxes_path).temporary);
     boxes_csv_ << "frame,x1,y1,x2,y2,body\n" << std::fixed << std::setprecision(2);
@@ -51,12 +51,12 @@ void Outputs::openOverlay(cv::Size size, double fps) {
   if (!overlay_.isOpened()) throw std::runtime_error("--overlay " + options_.overlay_path + ": cannot write the video");
 }
 
-void Outputs::writePose(int frame, double stamp_s, const kw::body::BodyPose& pose, int body,
+void Outputs::writePose(int frame, double stamp_s, const kw::body::BodyPose& pose, int body, int track,
                         const cv::Rect2d& image_box) {
   for (int j = 0; j < kw::body::kNumBodyJoints; ++j) {
     const Eigen::Vector3d& p = pose.joints[j];
     csv_ << frame << ',' << stamp_s << ',' << kw::body::jointName(kw::body::BodyJoint(j)) << ',' << p.x() << ','
-         << p.y() << ',' << p.z() << ',' << body << '\n';
+         << p.y() << ',' << p.z() << ',' << body << ',' << track << '\n';
   }
   if (boxes_csv_.is_open() && !image_box.empty())
     boxes_csv_ << frame << ',' << image_box.x << ',' << image_box.y << ',' << image_box.br().x << ','

@@ -31,7 +31,8 @@ class Outputs {
   bool writesGroundTrack() const { return !options_.ground_track_path.empty(); }
 
   // One body's joints at a frame (REP 155 body id), with its image box (empty: not written).
-  void writePose(int frame, double stamp_s, const core::body::BodyPose& pose, int body, const cv::Rect2d& image_box);
+  void writePose(int frame, double stamp_s, const core::body::BodyPose& pose, int body, int track,
+                 const cv::Rect2d& image_box);
   // One body's ground track at a frame.
   void writeGroundTrack(int frame, int body, const core::person::GroundTrackEstimate& estimate);
   // A frame's overlay picture: to the video, and to the strip when it is one of --strip-frames,

@@ -63,7 +63,7 @@ RunSummary TrackingLoop::run() {
   for (size_t i = 0; i < rest.size(); ++i) answer(rest[i], i + 1 == rest.size());
   for (const kw::tracking::PersonAnswer& person : session_.finish()) {
     for (const kw::tracking::MapFrame& m : person.map_frames)
-      if (options_.output.estimate != WrittenEstimate::kFiltered) writePose(m.input, m.stamp_s, m.pose, person.body);
+      if (options_.output.estimate != WrittenEstimate::kFiltered) writePose(m.input, m.stamp_s, m.pose, person.body, m.track);
     writeGroundTrack(person, -1);
   }
   if (summary_.tracked == 0 && summary_.interrupted_by == 0)
@@ -86,8 +86,8 @@ void TrackingLoop::restartLostTrack(int frame) {
   }
 }
 
-void TrackingLoop::writePose(int input, double stamp_s, const kw::body::BodyPose& pose, int body) {
-  outputs_.writePose(source_index_.at(input), stamp_s, pose, body,
+void TrackingLoop::writePose(int input, double stamp_s, const kw::body::BodyPose& pose, int body, int track) {
+  outputs_.writePose(source_index_.at(input), stamp_s, pose, body, track,
                      outputs_.writesBoxes() ? session_.tracker(body).imageBox(pose) : cv::Rect2d());
 }
 
@@ -107,7 +107,7 @@ void TrackingLoop::answer(const kw::tracking::SessionAnswer& a, bool latest) {
   int people_now = 0;
   for (const kw::tracking::PersonAnswer& person : a.people) {
     if (!filtered)
-      for (const kw::tracking::MapFrame& m : person.map_frames) writePose(m.input, m.stamp_s, m.pose, person.body);
+      for (const kw::tracking::MapFrame& m : person.map_frames) writePose(m.input, m.stamp_s, m.pose, person.body, m.track);
     writeGroundTrack(person, a.input);
     if (!person.estimate) continue;
     const kw::tracking::TrackEstimate& estimate = *person.estimate;
@@ -116,7 +116,7 @@ void TrackingLoop::answer(const kw::tracking::SessionAnswer& a, bool latest) {
     summary_.tracks_started += person.started;
     summary_.lost += estimate.lost;
     summary_.resampled += estimate.resampled;
-    if (filtered) writePose(a.input, a.stamp_s, estimate.pose, person.body);
+    if (filtered) writePose(a.input, a.stamp_s, estimate.pose, person.body, person.track);
     if (estimate.lost)
       if (const auto px = input_.camera.project(estimate.pose.joints[kw::body::kWaist]))
         lost_at_px_ = cv::Point2d(px->x(), px->y());

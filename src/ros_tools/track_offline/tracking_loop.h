@@ -44,7 +44,7 @@ class TrackingLoop {
   void answer(const core::tracking::SessionAnswer& answer, bool latest);
   // The frame's overlay: each person's body, the particle cloud of the latest frame, the state.
   void drawAnswer(const core::tracking::SessionAnswer& answer, bool latest, int people_now);
-  void writePose(int input, double stamp_s, const core::body::BodyPose& pose, int body);
+  void writePose(int input, double stamp_s, const core::body::BodyPose& pose, int body, int track);
   // The person's ground track as --out-ground-track wants it: this frame's (input), filtered, or
   // the track's smoothed when it ends.
   void writeGroundTrack(const core::tracking::PersonAnswer& person, int input);

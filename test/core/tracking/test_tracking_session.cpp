@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <map>
 #include <set>
 
 #include "rendered_walk.h"
@@ -383,6 +384,7 @@ TwoPeopleRun runTwoPeople(size_t skip_after, size_t skipped) {
   TwoPeopleRun run;
   std::set<int> bodies;
   std::set<std::pair<int, int>> lost;  // (input, body)
+  std::map<int, int> last_track;       // body: the track of its last estimate
   auto shown = [&](size_t input) { return input <= skip_after ? input : input + skipped; };  // the walk's frame
   for (size_t i = 0; shown(i) < s.frames.size(); ++i)
     for (const SessionAnswer& a : session.feed(s.frames[shown(i)], 0.1 * i)) {
@@ -390,8 +392,17 @@ TwoPeopleRun runTwoPeople(size_t skip_after, size_t skipped) {
         if (p.ended && p.estimate && p.estimate->lost) lost.insert({a.input, p.body});
         if (p.started && p.message.find("found again where lost") != std::string::npos) {
           EXPECT_TRUE(lost.count({a.input - 1, p.body})) << "input " << a.input << ": body " << p.body << " " << p.message;
+          EXPECT_GE(p.track, 2) << "a track started again is a new track of its body";
           ++run.found_again;
         }
+        // Each body's tracks are numbered from 1, a new one at each start; MAP frames carry
+        // theirs (at a start, the ended track's last ones).
+        if (!p.estimate) continue;
+        EXPECT_EQ(p.track, last_track[p.body] + (p.started ? 1 : 0)) << "input " << a.input << ": body " << p.body;
+        last_track[p.body] = p.track;
+        for (const MapFrame& f : p.map_frames)
+          EXPECT_TRUE(f.track == p.track || (p.started && f.track == p.track - 1))
+              << "input " << a.input << ": body " << p.body << " track " << p.track << ", MAP frame's " << f.track;
       }
       int tracks = 0;
       // Each person's nearest track (followed when within 0.5 m).

@@ -99,6 +99,7 @@ struct MapFrame {
   int input = 0;
   double stamp_s = 0;
   body::BodyPose pose;
+  int track = 0;  // the body's track it belongs to (PersonAnswer::track)
 };
 
 // One body slot's part of a frame's answer: there is one for each slot whose track ran, started
@@ -106,6 +107,11 @@ struct MapFrame {
 struct PersonAnswer {
   int body = 1;          // the slot, 1..max_people: the REP 155 body id
   bool started = false;  // a track started in this slot at this frame
+  // The track of `estimate`, counted from 1 in this slot since the session was made (reset() too):
+  // a new number each time the slot's walkers start (a lost person started again, another
+  // person): the pose jumps there, so poses of different tracks are not joined (a path, a
+  // velocity, foot skate).
+  int track = 0;
   // The slot's track ended at this frame (lost, merged into an older track, replaced by a given
   // guess); a track started at the same frame is a new one.
   bool ended = false;
@@ -196,6 +202,7 @@ class TrackingSession {
     std::unique_ptr<Tracker> tracker;  // made when first used
     std::optional<Start> start;        // its track is starting
     int started_input = -1;            // the input its track started at (the older track wins a merge)
+    int track = 0;                     // its walkers' track number (PersonAnswer::track): the last started
     std::vector<std::pair<int, double>> track_inputs;  // per tracker frame: input index, stamp
     int map_written = -1;              // the last tracker frame given as a MapFrame
     std::optional<InitialGuess> reacquire;  // its lost person, found again: the next frame starts there
