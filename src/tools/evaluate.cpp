@@ -9,6 +9,14 @@
 //   estimated_frames=N/M     the truth's frames that the estimate has (the figures are over them)
 //   lost_frames=             frames whose mean joint error exceeds --lost-mm (150), and the
 //                            truth's frames the estimate does not have
+//   legs_swapped_percent=    frames whose estimate, its left and right joints exchanged, is
+//                            nearer the truth (root-relative): the legs the wrong way round; and
+//                            root_relative_swap_free_mm= the root-relative error with each such
+//                            frame's swap undone
+//   knee_angle_error_deg=    mean error of each knee's flexion, hip_angle_error_deg= of each
+//                            thigh's angle to the torso in the sagittal plane, torso_lean_error_deg=
+//                            of the torso's forward lean (each frame's swap undone): which part of
+//                            the pose is wrong
 //   heading_error_1s_deg=    the walking direction's error 1 s after the estimate's first frame
 //                            (each the waist's over ±0.5 s; over 90°: started mirrored)
 //   depth_bias_mm=           with --ground (the calibration: the camera's position), the mean
@@ -91,6 +99,45 @@ std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const k
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
   const double height_m = heights[heights.size() / 2];
   return std::isfinite(height_m) && height_m > 0 ? std::optional<double>(height_m) : std::nullopt;
+}
+
+// The pose with its left and right joints exchanged (l_* <-> r_*).
+Pose mirroredLegs(const Pose& pose) {
+  Pose mirrored;
+  for (const auto& [joint, p] : pose) {
+    std::string name = joint;
+    if (name.rfind("l_", 0) == 0) name[0] = 'r';
+    else if (name.rfind("r_", 0) == 0) name[0] = 'l';
+    mirrored[name] = p;
+  }
+  return mirrored;
+}
+
+// A pose's sagittal angles: each knee's flexion (left, right), each hip's (the thigh against the
+// torso's axis, in the plane of the walking direction and the vertical; forward positive), and the
+// torso's forward lean. The walking direction is the hips' left-to-right axis crossed with up.
+struct SagittalAngles {
+  std::array<double, 2> knee_rad{}, hip_rad{};
+  double lean_rad = 0;
+};
+std::optional<SagittalAngles> sagittalAngles(const Pose& pose, const Eigen::Vector3d& up) {
+  for (const char* joint : {"waist", "neck", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle"})
+    if (!pose.count(joint)) return std::nullopt;
+  const Eigen::Vector3d forward = (pose.at("l_hip") - pose.at("r_hip")).cross(up).normalized();
+  const Eigen::Vector3d torso_down = (pose.at("waist") - pose.at("neck")).normalized();
+  SagittalAngles angles;
+  angles.lean_rad = kw::body::torsoLeanRad(pose.at("waist"), pose.at("neck"), forward);
+  static const char* const kLeg[2][3] = {{"l_hip", "l_knee", "l_ankle"}, {"r_hip", "r_knee", "r_ankle"}};
+  for (int side : {0, 1}) {
+    const Eigen::Vector3d& hip = pose.at(kLeg[side][0]);
+    const Eigen::Vector3d& knee = pose.at(kLeg[side][1]);
+    angles.knee_rad[side] = kw::body::kneeFlexionRad(hip, knee, pose.at(kLeg[side][2]));
+    const Eigen::Vector3d thigh = knee - hip;
+    // The torso's frame in the sagittal plane: its downward axis, and forward square to it.
+    const Eigen::Vector3d ahead = (forward - forward.dot(torso_down) * torso_down).normalized();
+    angles.hip_rad[side] = std::atan2(thigh.dot(ahead), thigh.dot(torso_down));
+  }
+  return angles;
 }
 
 // The poses of one body: `body` (empty: the file's only one); each frame's stamp into `stamps`,
@@ -298,6 +345,47 @@ int main(int argc, char** argv) {
       lost += 1000 * frame_sum / frame_count > lost_mm;
     }
     if (frames == 0) throw std::runtime_error("no frame with common joints in both files");
+    // Where the pose's error comes from: the legs swapped (a frame is swapped when the estimate
+    // with its left and right joints exchanged is nearer the truth, root-relative), and the
+    // joint angles with each frame's swap undone.
+    const Eigen::Vector3d vertical = ground.normal();
+    int compared_frames = 0, swapped_frames = 0, angle_frames = 0, knee_count = 0;
+    double swap_free_sum = 0, knee_sum = 0, hip_sum = 0, lean_sum = 0;
+    int swap_free_count = 0;
+    for (const auto& [frame, t] : truth) {
+      const auto e = estimate.find(frame);
+      if (e == estimate.end() || !t.count("waist") || !e->second.count("waist")) continue;
+      const Pose swapped = mirroredLegs(e->second);
+      const auto relative = [&](const Pose& estimated, int* joints) {
+        double total = 0;
+        *joints = 0;
+        for (const auto& [joint, p] : t) {
+          const auto q = estimated.find(joint);
+          if (q == estimated.end()) continue;
+          total += ((q->second - estimated.at("waist")) - (p - t.at("waist"))).norm();
+          ++*joints;
+        }
+        return total;
+      };
+      int joints = 0, swapped_joints = 0;
+      const double as_is = relative(e->second, &joints), exchanged = relative(swapped, &swapped_joints);
+      if (joints == 0) continue;
+      const bool swap = exchanged < as_is;
+      ++compared_frames;
+      swapped_frames += swap;
+      swap_free_sum += swap ? exchanged : as_is;
+      swap_free_count += joints;
+      const Pose& estimated = swap ? swapped : e->second;
+      const auto angles = sagittalAngles(t, vertical), estimated_angles = sagittalAngles(estimated, vertical);
+      if (!angles || !estimated_angles) continue;
+      ++angle_frames;
+      for (int side : {0, 1}) {
+        knee_sum += std::abs(estimated_angles->knee_rad[side] - angles->knee_rad[side]);
+        hip_sum += std::abs(estimated_angles->hip_rad[side] - angles->hip_rad[side]);
+        ++knee_count;
+      }
+      lean_sum += std::abs(estimated_angles->lean_rad - angles->lean_rad);
+    }
     // A truth frame the estimate does not have (a lost track's gap) is lost too.
     const int missing = static_cast<int>(truth.size()) - frames;
     lost += missing;
@@ -407,6 +495,12 @@ int main(int argc, char** argv) {
     std::printf("mean_joint_error_mm=%.1f\n", 1000 * sum / count);
     std::printf("root_relative_error_mm=%.1f\n", 1000 * root_sum / count);
     std::printf("lost_frames=%d\n", lost);
+    if (compared_frames > 0)
+      std::printf("legs_swapped_percent=%.1f\nroot_relative_swap_free_mm=%.1f\n", 100.0 * swapped_frames / compared_frames,
+                  1000 * swap_free_sum / swap_free_count);
+    if (angle_frames > 0)
+      std::printf("knee_angle_error_deg=%.1f\nhip_angle_error_deg=%.1f\ntorso_lean_error_deg=%.1f\n",
+                  180 / M_PI * knee_sum / knee_count, 180 / M_PI * hip_sum / knee_count, 180 / M_PI * lean_sum / angle_frames);
     if (sight_frames > 0)
       std::printf("depth_bias_mm=%.1f\nlateral_error_mm=%.1f\nrange_error_mm=%.1f\nrange_error_p95_mm=%.1f\n"
                   "range_error_percent=%.2f\n",
