@@ -101,6 +101,17 @@ std::optional<double> heightFromThighs(const std::map<int, Pose>& poses, const k
   return std::isfinite(height_m) && height_m > 0 ? std::optional<double>(height_m) : std::nullopt;
 }
 
+// The sum over the joints both poses have of the error with each pose's waist subtracted
+// (both must have a waist), m.
+double rootRelativeSum(const Pose& truth, const Pose& estimated) {
+  double total = 0;
+  for (const auto& [joint, p] : truth) {
+    const auto q = estimated.find(joint);
+    if (q != estimated.end()) total += ((q->second - estimated.at("waist")) - (p - truth.at("waist"))).norm();
+  }
+  return total;
+}
+
 // The pose with its left and right joints exchanged (l_* <-> r_*).
 Pose mirroredLegs(const Pose& pose) {
   Pose mirrored;
@@ -127,14 +138,14 @@ std::optional<SagittalAngles> sagittalAngles(const Pose& pose, const Eigen::Vect
   const Eigen::Vector3d torso_down = (pose.at("waist") - pose.at("neck")).normalized();
   SagittalAngles angles;
   angles.lean_rad = kw::body::torsoLeanRad(pose.at("waist"), pose.at("neck"), forward);
+  // The torso's frame in the sagittal plane: its downward axis, and forward square to it.
+  const Eigen::Vector3d ahead = (forward - forward.dot(torso_down) * torso_down).normalized();
   static const char* const kLeg[2][3] = {{"l_hip", "l_knee", "l_ankle"}, {"r_hip", "r_knee", "r_ankle"}};
   for (int side : {0, 1}) {
     const Eigen::Vector3d& hip = pose.at(kLeg[side][0]);
     const Eigen::Vector3d& knee = pose.at(kLeg[side][1]);
     angles.knee_rad[side] = kw::body::kneeFlexionRad(hip, knee, pose.at(kLeg[side][2]));
     const Eigen::Vector3d thigh = knee - hip;
-    // The torso's frame in the sagittal plane: its downward axis, and forward square to it.
-    const Eigen::Vector3d ahead = (forward - forward.dot(torso_down) * torso_down).normalized();
     angles.hip_rad[side] = std::atan2(thigh.dot(ahead), thigh.dot(torso_down));
   }
   return angles;
@@ -336,9 +347,9 @@ int main(int argc, char** argv) {
         ++frame_count;
         per_joint[joint].first += error;
         ++per_joint[joint].second;
-        if (roots) root_sum += ((q->second - e->second.at("waist")) - (p - t.at("waist"))).norm();
       }
       if (frame_count == 0) continue;
+      if (roots) root_sum += rootRelativeSum(t, e->second);
       sum += frame_sum;
       count += frame_count;
       ++frames;
@@ -355,21 +366,11 @@ int main(int argc, char** argv) {
     for (const auto& [frame, t] : truth) {
       const auto e = estimate.find(frame);
       if (e == estimate.end() || !t.count("waist") || !e->second.count("waist")) continue;
-      const Pose swapped = mirroredLegs(e->second);
-      const auto relative = [&](const Pose& estimated, int* joints) {
-        double total = 0;
-        *joints = 0;
-        for (const auto& [joint, p] : t) {
-          const auto q = estimated.find(joint);
-          if (q == estimated.end()) continue;
-          total += ((q->second - estimated.at("waist")) - (p - t.at("waist"))).norm();
-          ++*joints;
-        }
-        return total;
-      };
-      int joints = 0, swapped_joints = 0;
-      const double as_is = relative(e->second, &joints), exchanged = relative(swapped, &swapped_joints);
+      const int joints = static_cast<int>(std::count_if(
+          t.begin(), t.end(), [&](const auto& joint) { return e->second.count(joint.first) > 0; }));
       if (joints == 0) continue;
+      const Pose swapped = mirroredLegs(e->second);
+      const double as_is = rootRelativeSum(t, e->second), exchanged = rootRelativeSum(t, swapped);
       const bool swap = exchanged < as_is;
       ++compared_frames;
       swapped_frames += swap;
